@@ -1,0 +1,23 @@
+# Shared build helpers: warning flags and test registration.
+
+# Warnings apply to project targets only (generated LCM headers are included as SYSTEM).
+function(cosim_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+endfunction()
+
+# cosim_add_gtest(NAME name SOURCES ... LIBS ... LABELS ... TIMEOUT seconds)
+# Builds a GoogleTest executable and registers it with CTest as one test with a timeout.
+function(cosim_add_gtest)
+  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 120)
+  endif()
+  add_executable(${T_NAME} ${T_SOURCES})
+  cosim_warnings(${T_NAME})
+  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  add_test(NAME ${T_NAME} COMMAND ${T_NAME})
+  set_tests_properties(${T_NAME} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}"
+                       WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
+endfunction()
+
+set(COSIM_SHARED_REFERENCES "${CMAKE_SOURCE_DIR}/references" CACHE PATH "Validation reference data")
