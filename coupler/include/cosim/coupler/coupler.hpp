@@ -1,0 +1,75 @@
+// The coupler: runs the windows of a scene in lockstep with every participant, rebroadcasting
+// until each answers, and stops the run with a named culprit when a participant fails, dies or
+// falls silent. It never does physics: it only orders, waits, records and reports.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cosim/coupler/bus.hpp"
+#include "cosim/coupler/process_group.hpp"
+#include "cosim/scenario/scene.hpp"
+
+namespace cosim::coupler {
+
+struct CouplerOptions {
+  std::string url;
+  int64_t run_id = 0;
+  std::filesystem::path event_log;  // every message heard is recorded here
+  double loss_probability = 0.0;
+  double startup_timeout = 60.0;    // seconds for every participant to become ready
+  bool show_progress = true;
+};
+
+struct ParticipantReport {
+  std::string name;
+  double compute_seconds = 0.0;
+  double wait_seconds = 0.0;
+  int64_t windows = 0;
+  int64_t steps = 0;  // solver steps (sub-steps for sub-cycling solids), summed over windows
+  std::string metrics_json;  // the participant's final report
+};
+
+struct RunResult {
+  bool ok = false;
+  std::string failure;  // names the participant and the window when !ok
+  int64_t windows_completed = 0;
+  int64_t total_windows = 0;
+  double simulated_time = 0.0;
+  double wall_seconds = 0.0;
+  double coupler_wait_seconds = 0.0;
+  std::vector<ParticipantReport> participants;
+  Bus::Counters traffic;
+};
+
+class Coupler {
+ public:
+  Coupler(const scenario::Scene& scene, CouplerOptions options);
+  // Runs the scene with participants already started in `processes`.
+  RunResult run(ProcessGroup& processes);
+
+ private:
+  struct Failure : std::runtime_error {
+    using std::runtime_error::runtime_error;
+  };
+  void handshake(ProcessGroup& processes);
+  void run_window(ProcessGroup& processes, int64_t index, double time, double dt);
+  void finish(ProcessGroup& processes, int64_t index, double time);
+  void check_processes(ProcessGroup& processes, const std::string& during);
+  void check_silence(const std::vector<std::string>& pending, const std::string& during);
+  void show_progress(int64_t index, double time, bool force);
+
+  const scenario::Scene& scene_;
+  CouplerOptions options_;
+  std::unique_ptr<Bus> bus_;
+  std::vector<std::string> names_;  // acts_as names of the participants
+  std::map<std::string, ParticipantReport> reports_;
+  double next_stable_dt_ = 0.0;
+  std::chrono::steady_clock::time_point started_;
+  std::chrono::steady_clock::time_point last_progress_;
+};
+
+}  // namespace cosim::coupler

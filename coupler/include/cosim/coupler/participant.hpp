@@ -1,0 +1,95 @@
+// The one API every solver process uses to take part in a coupled run. A solver calls
+// next_window(), receives what it needs from its partners, computes, publishes its fields and
+// calls done(). Retransmission, heartbeats and timeouts are handled here, so a lost message
+// never hangs or corrupts a run and a silent partner is reported by name.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cosim/coupler/bus.hpp"
+
+namespace cosim::coupler {
+
+// The run cannot go on: a partner fell silent, the coupler aborted, or a message was malformed.
+class CouplingError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ParticipantOptions {
+  std::string name;  // the name this participant publishes under
+  std::string url;
+  int64_t run_id = 0;
+  double timeout = 5.0;           // seconds of partner silence before giving up
+  double resend_interval = 0.05;  // seconds between retransmission requests
+  int chunk_values = 4096;
+  double loss_probability = 0.0;
+  uint64_t loss_seed = 1;
+};
+
+struct Window {
+  int64_t index = 0;  // 0 is the initialisation window (dt = 0)
+  double time = 0.0;  // start of the window
+  double dt = 0.0;
+  int64_t total_windows = 0;
+  bool finish = false;  // the coupler asks for final outputs and metrics
+  double end_time() const { return time + dt; }
+};
+
+class Participant {
+ public:
+  explicit Participant(ParticipantOptions options);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  const std::string& name() const { return options_.name; }
+
+  // Waits for the next window (answering the handshake and repeated windows on the way).
+  Window next_window();
+  // Publishes a field for the current window.
+  void publish(const std::string& field, std::span<const double> values);
+  // Waits for `sender`'s field of `window`, asking for lost chunks again. Throws CouplingError
+  // when the sender stays silent longer than the timeout, or the coupler aborts.
+  std::vector<double> receive(const std::string& sender, const std::string& field, int64_t window);
+  // Marks the current window done. `steps`: solver steps taken (sub-steps for solids);
+  // stable_dt: the largest next window this participant accepts (0 for no limit).
+  void done(int steps, double stable_dt = 0.0);
+  // Final report after the FINISH window: metrics as a JSON object text.
+  void finished(const std::string& metrics_json);
+  // Reports a failure to the coupler (several times, since it may be lost) before exiting.
+  void failed(const std::string& message);
+
+  // Time accounting: compute time is everything outside waiting for partners.
+  double wait_seconds() const { return wait_seconds_; }
+  double compute_seconds() const;
+  int64_t total_steps() const { return total_steps_; }
+  Bus& bus() { return *bus_; }
+
+ private:
+  void publish_state(int8_t state, int steps, double stable_dt, const std::string& message);
+  void heartbeat_loop();
+  void check_abort();
+  Stamp stamp() const;
+
+  ParticipantOptions options_;
+  std::unique_ptr<Bus> bus_;
+  Window current_;
+  bool current_done_ = false;
+  int last_steps_ = 0;
+  double last_stable_dt_ = 0.0;
+  double wait_seconds_ = 0.0;
+  int64_t total_steps_ = 0;
+  std::chrono::steady_clock::time_point started_;
+  std::atomic<bool> stop_heartbeat_{false};
+  std::atomic<int64_t> heartbeat_window_{-1};
+  std::thread heartbeat_;
+};
+
+}  // namespace cosim::coupler

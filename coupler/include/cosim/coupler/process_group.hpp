@@ -1,0 +1,52 @@
+// Child processes of a run: started with their output in a log file, watched for early exits,
+// and stopped together when the run ends or fails.
+#pragma once
+
+#include <sys/types.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cosim::coupler {
+
+struct ChildExit {
+  std::string name;
+  int exit_code = 0;     // valid when !signaled
+  int signal = 0;        // valid when signaled
+  bool signaled = false;
+  std::string describe() const;
+};
+
+class ProcessGroup {
+ public:
+  ProcessGroup() = default;
+  ~ProcessGroup();
+  ProcessGroup(const ProcessGroup&) = delete;
+  ProcessGroup& operator=(const ProcessGroup&) = delete;
+
+  // Starts `arguments[0]` with stdout and stderr appended to `log_file`.
+  void start(const std::string& name, const std::vector<std::string>& arguments,
+             const std::filesystem::path& log_file);
+  // Reaps children that exited since the last call.
+  std::vector<ChildExit> poll_exits();
+  // Waits up to `seconds` for every child to exit, then kills the rest.
+  std::vector<ChildExit> wait_all(double seconds);
+  void terminate_all();
+  bool running(const std::string& name) const;
+  pid_t pid_of(const std::string& name) const;
+
+ private:
+  struct Child {
+    std::string name;
+    pid_t pid = -1;
+    bool exited = false;
+  };
+  std::vector<Child> children_;
+};
+
+// The folder holding this executable (solver executables are installed beside `cosim`).
+std::filesystem::path executable_dir();
+
+}  // namespace cosim::coupler

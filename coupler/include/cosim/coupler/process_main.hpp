@@ -1,0 +1,54 @@
+// What every solver process shares: its command line, the resolved scene, its own section,
+// the participant connection, logging, fault injection for tests, and turning any error into a
+// report to the coupler plus a non-zero exit code.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "cosim/coupler/participant.hpp"
+#include "cosim/scenario/scene.hpp"
+#include "cosim/scenario/section.hpp"
+
+namespace cosim::coupler {
+
+class ProcessContext {
+ public:
+  scenario::Scene scene;
+  std::string section_name;  // key of this process in `participants`
+  std::string acts_as;       // name it publishes under
+  std::filesystem::path run_dir;
+  std::unique_ptr<Participant> participant;
+
+  // This process's section of the resolved scenario, for its own parser.
+  scenario::Section section();
+  // Output folder for this participant's files (created).
+  std::filesystem::path output_dir() const;
+  // Called at the start of every window: carries out an injected fault when one is due.
+  void maybe_inject_fault(int64_t window) const;
+
+ private:
+  friend int run_process(int, char**, const std::string&,
+                         const std::function<void(ProcessContext&)>&);
+  YAML::Node document_;
+  YAML::Node resolved_scratch_;
+  std::string fault_kind_;
+  int64_t fault_window_ = -1;
+};
+
+// Parses the common command line, connects, runs `body`, and reports failures. Returns the
+// process exit code (0 on success).
+int run_process(int argc, char** argv, const std::string& program,
+                const std::function<void(ProcessContext&)>& body);
+
+// Command line given to a solver process by the launcher.
+std::vector<std::string> process_arguments(const std::filesystem::path& executable,
+                                           const std::filesystem::path& resolved_scenario,
+                                           const std::filesystem::path& run_dir,
+                                           const std::string& section_name, const std::string& url,
+                                           int64_t run_id, double loss_probability,
+                                           const std::string& fault);
+
+}  // namespace cosim::coupler

@@ -1,0 +1,222 @@
+#include "cosim/coupler/coupler.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+namespace cosim::coupler {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+using cosim_msgs::status_t;
+using cosim_msgs::window_t;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+}  // namespace
+
+Coupler::Coupler(const scenario::Scene& scene, CouplerOptions options)
+    : scene_(scene), options_(std::move(options)) {
+  BusOptions bus_options;
+  bus_options.url = options_.url;
+  bus_options.run_id = options_.run_id;
+  bus_options.name = "coupler";
+  bus_options.record_log = options_.event_log;
+  bus_options.loss_probability = options_.loss_probability;
+  bus_options.loss_seed = static_cast<uint64_t>(options_.run_id) + 17;
+  bus_options.chunk_values = scene_.coupling.chunk_values;
+  bus_ = std::make_unique<Bus>(bus_options);
+  for (const auto& entry : scene_.participants) {
+    names_.push_back(entry.acts_as);
+    reports_[entry.acts_as].name = entry.acts_as;
+  }
+}
+
+void Coupler::check_processes(ProcessGroup& processes, const std::string& during) {
+  for (const auto& exit : processes.poll_exits()) {
+    throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(), during, exit.name));
+  }
+}
+
+void Coupler::check_silence(const std::vector<std::string>& pending, const std::string& during) {
+  for (const auto& name : pending) {
+    const auto heard = bus_->last_heard(name);
+    if (heard && std::chrono::duration<double>(Clock::now() - *heard).count() >
+                     scene_.coupling.timeout) {
+      throw Failure(fmt::format("'{}' stopped answering during {}: silent for more than {:.1f} s",
+                                name, during, scene_.coupling.timeout));
+    }
+  }
+}
+
+void Coupler::handshake(ProcessGroup& processes) {
+  std::vector<std::string> pending = names_;
+  auto last_broadcast = Clock::now() - std::chrono::hours(1);
+  const auto start = Clock::now();
+  while (!pending.empty()) {
+    if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
+      bus_->publish_window(Stamp{0, 0.0, 0.0}, window_t::COMMAND_HANDSHAKE,
+                           scene_.total_windows());
+      last_broadcast = Clock::now();
+    }
+    bus_->poll(scene_.coupling.resend_interval);
+    auto& statuses = bus_->statuses();
+    while (!statuses.empty()) {
+      const status_t status = statuses.front();
+      statuses.pop_front();
+      if (status.state == status_t::STATE_FAILED) {
+        throw Failure(fmt::format("'{}' failed while starting: {}", status.header.sender,
+                                  status.message));
+      }
+      if (status.state == status_t::STATE_READY) std::erase(pending, status.header.sender);
+    }
+    check_processes(processes, "start-up");
+    check_silence(pending, "start-up");
+    if (seconds_since(start) > options_.startup_timeout) {
+      throw Failure(fmt::format("participant(s) {} did not become ready within {:.0f} s",
+                                fmt::join(pending, ", "), options_.startup_timeout));
+    }
+  }
+}
+
+void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, double dt) {
+  const std::string during = fmt::format("window {} (t = {:.6g} s)", index, time);
+  std::vector<std::string> pending = names_;
+  auto last_broadcast = Clock::now() - std::chrono::hours(1);
+  next_stable_dt_ = 0.0;
+  while (!pending.empty()) {
+    if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
+      // Rebroadcasting is both retransmission and the coupler's heartbeat.
+      bus_->publish_window(Stamp{index, time, dt}, window_t::COMMAND_ADVANCE,
+                           scene_.total_windows());
+      last_broadcast = Clock::now();
+    }
+    bus_->poll(scene_.coupling.resend_interval);
+    auto& statuses = bus_->statuses();
+    while (!statuses.empty()) {
+      const status_t status = statuses.front();
+      statuses.pop_front();
+      const std::string& sender = status.header.sender;
+      if (status.state == status_t::STATE_FAILED) {
+        throw Failure(fmt::format("'{}' failed in window {} (t = {:.6g} s): {}", sender,
+                                  status.header.window, status.header.sim_time, status.message));
+      }
+      if (status.state != status_t::STATE_DONE || status.header.window != index) continue;
+      if (std::find(pending.begin(), pending.end(), sender) == pending.end()) continue;
+      std::erase(pending, sender);
+      auto& report = reports_[sender];
+      report.windows += 1;
+      report.steps += status.steps;
+      report.compute_seconds = status.compute_seconds;
+      report.wait_seconds = status.wait_seconds;
+      if (status.stable_dt > 0.0) {
+        next_stable_dt_ = next_stable_dt_ > 0.0 ? std::min(next_stable_dt_, status.stable_dt)
+                                                : status.stable_dt;
+      }
+    }
+    check_processes(processes, during);
+    check_silence(pending, during);
+  }
+}
+
+void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
+  std::vector<std::string> pending = names_;
+  auto last_broadcast = Clock::now() - std::chrono::hours(1);
+  while (!pending.empty()) {
+    if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
+      bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_FINISH,
+                           scene_.total_windows());
+      last_broadcast = Clock::now();
+    }
+    bus_->poll(scene_.coupling.resend_interval);
+    auto& statuses = bus_->statuses();
+    while (!statuses.empty()) {
+      const status_t status = statuses.front();
+      statuses.pop_front();
+      const std::string& sender = status.header.sender;
+      if (status.state == status_t::STATE_FAILED) {
+        throw Failure(fmt::format("'{}' failed while finishing: {}", sender, status.message));
+      }
+      if (status.state != status_t::STATE_FINISHED) continue;
+      if (std::find(pending.begin(), pending.end(), sender) == pending.end()) continue;
+      std::erase(pending, sender);
+      auto& report = reports_[sender];
+      report.metrics_json = status.message;
+      report.compute_seconds = status.compute_seconds;
+      report.wait_seconds = status.wait_seconds;
+    }
+    check_processes(processes, "the final report");
+    check_silence(pending, "the final report");
+  }
+  for (int repeat = 0; repeat < 3; ++repeat) {
+    bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_RELEASE,
+                         scene_.total_windows());
+    bus_->poll(scene_.coupling.resend_interval);
+  }
+}
+
+void Coupler::show_progress(int64_t index, double time, bool force) {
+  if (!options_.show_progress) return;
+  if (!force && seconds_since(last_progress_) < 1.0) return;
+  last_progress_ = Clock::now();
+  const int64_t total = scene_.total_windows();
+  fmt::print(stderr, "\r[{}] window {}/{}  t = {:.4f} s of {:.4f} s  wall {:.1f} s   ",
+             scene_.name, index, total, time, scene_.duration, seconds_since(started_));
+  if (force) fmt::print(stderr, "\n");
+}
+
+RunResult Coupler::run(ProcessGroup& processes) {
+  RunResult result;
+  result.total_windows = scene_.total_windows();
+  started_ = Clock::now();
+  last_progress_ = started_;
+  double time = 0.0;
+  int64_t index = 0;
+  try {
+    handshake(processes);
+    // Window 0 exchanges initial states (dt = 0), then windows 1..N advance time.
+    run_window(processes, 0, 0.0, 0.0);
+    for (index = 1; index <= result.total_windows; ++index) {
+      double dt = scene_.coupling.window;
+      if (scene_.coupling.adaptive_window && next_stable_dt_ > 0.0) {
+        dt = std::min(dt, next_stable_dt_);
+      }
+      // Land exactly on the scene's duration.
+      dt = std::min(dt, scene_.duration - time);
+      if (dt <= scene_.duration * 1e-12) break;
+      run_window(processes, index, time, dt);
+      time += dt;
+      result.windows_completed = index;
+      show_progress(index, time, false);
+      if (scene_.coupling.adaptive_window && index == result.total_windows &&
+          time < scene_.duration * (1 - 1e-12)) {
+        ++result.total_windows;  // adaptive windows may need more than the nominal count
+      }
+    }
+    show_progress(result.windows_completed, time, true);
+    finish(processes, result.windows_completed + 1, time);
+    result.ok = true;
+  } catch (const Failure& failure) {
+    if (options_.show_progress) fmt::print(stderr, "\n");
+    result.failure = failure.what();
+    for (int repeat = 0; repeat < 3; ++repeat) {
+      bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_ABORT,
+                           scene_.total_windows(), result.failure);
+      bus_->poll(0.01);
+    }
+    processes.terminate_all();
+  }
+  processes.wait_all(result.ok ? 10.0 : 2.0);
+  result.simulated_time = time;
+  result.wall_seconds = seconds_since(started_);
+  for (const auto& name : names_) result.participants.push_back(reports_[name]);
+  result.traffic = bus_->counters();
+  return result;
+}
+
+}  // namespace cosim::coupler

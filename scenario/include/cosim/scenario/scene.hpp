@@ -1,0 +1,69 @@
+// The top level of a scenario bundle: which participants run, how they are coupled, for how
+// long, and where outputs go. Each participant's own section is checked by that participant's
+// parser, registered by the caller, so every error is found before any process starts.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cosim/scenario/section.hpp"
+
+namespace cosim::scenario {
+
+enum class Role { flow, solid };
+
+struct CouplingSettings {
+  std::string scheme = "serial-explicit";  // or "parallel-explicit"
+  double window = 1e-3;                    // fixed window length [s]
+  bool adaptive_window = false;            // window = min(window, flow's stable dt)
+  std::string interpolation = "linear";    // solids: "linear" across the window or "hold"
+  double timeout = 5.0;                    // seconds of silence before a participant is hung
+  double resend_interval = 0.05;           // seconds between retransmissions
+  int chunk_values = 4096;                 // float64 values per message chunk
+};
+
+struct ParticipantEntry {
+  std::string name;        // key in the scenario ("fluid_mps", "replay", ...)
+  std::string executable;  // process to start
+  std::string acts_as;     // the name it publishes under (replay acts as the recorded one)
+  Role role = Role::solid;
+};
+
+struct Scene {
+  std::filesystem::path file;  // scenario.yaml
+  std::string name;
+  std::string description;
+  double duration = 0.0;
+  double output_interval = 0.0;
+  CouplingSettings coupling;
+  std::vector<ParticipantEntry> participants;  // flow provider first, then solids
+  YAML::Node resolved;                          // every value used, defaults included
+
+  int total_windows() const;
+  const ParticipantEntry* flow() const;
+  std::vector<const ParticipantEntry*> solids() const;
+  const ParticipantEntry& participant(const std::string& acts_as) const;
+};
+
+// Checks one participant's section (throws ScenarioError naming file, line, key).
+using ParticipantParser = std::function<void(Section& section)>;
+
+// Every participant a scene may name, with its role ("replay" takes its replayed one's role).
+const std::map<std::string, Role>& participant_roles();
+
+// Loads <bundle>/scenario.yaml (or the file itself), checks the top level and every participant
+// section with `parsers` (one per name of participant_roles()), and returns the scene with its
+// resolved YAML. Unknown keys anywhere are errors.
+Scene load_scene(const std::filesystem::path& bundle_or_file,
+                 const std::map<std::string, ParticipantParser>& parsers);
+
+// Reads a resolved scenario written by a run, which was checked when the run started; the
+// participant sections are left to each process's own parser.
+Scene load_resolved_scene(const std::filesystem::path& file);
+
+std::string role_name(Role role);
+
+}  // namespace cosim::scenario

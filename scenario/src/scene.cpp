@@ -1,0 +1,141 @@
+#include "cosim/scenario/scene.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace cosim::scenario {
+
+std::string role_name(Role role) { return role == Role::flow ? "flow" : "solid"; }
+
+const std::map<std::string, Role>& participant_roles() {
+  static const std::map<std::string, Role> roles{{"fluid_mps", Role::flow},
+                                                 {"prescribed_flow", Role::flow},
+                                                 {"vegetation_beam", Role::solid},
+                                                 {"debris_dem", Role::solid},
+                                                 {"replay", Role::solid}};
+  return roles;
+}
+
+int Scene::total_windows() const {
+  // A window shorter than the configured one would change the physics of the last step, so
+  // the run covers at least `duration`.
+  return static_cast<int>(std::ceil(duration / coupling.window - 1e-9));
+}
+
+const ParticipantEntry* Scene::flow() const {
+  for (const auto& entry : participants) {
+    if (entry.role == Role::flow) return &entry;
+  }
+  return nullptr;
+}
+
+std::vector<const ParticipantEntry*> Scene::solids() const {
+  std::vector<const ParticipantEntry*> result;
+  for (const auto& entry : participants) {
+    if (entry.role == Role::solid) result.push_back(&entry);
+  }
+  return result;
+}
+
+const ParticipantEntry& Scene::participant(const std::string& acts_as) const {
+  for (const auto& entry : participants) {
+    if (entry.acts_as == acts_as) return entry;
+  }
+  throw ScenarioError(fmt::format("{}: no participant '{}' in this scene", file.string(), acts_as));
+}
+
+namespace {
+
+CouplingSettings parse_coupling(Section coupling) {
+  CouplingSettings settings;
+  settings.scheme =
+      coupling.text("scheme", settings.scheme, {"serial-explicit", "parallel-explicit"});
+  settings.window = coupling.number("window", Range::positive());
+  settings.adaptive_window = coupling.flag("adaptive_window", settings.adaptive_window);
+  settings.interpolation = coupling.text("interpolation", settings.interpolation, {"linear", "hold"});
+  settings.timeout = coupling.number("timeout", settings.timeout, Range::between(0.1, 3600.0));
+  settings.resend_interval =
+      coupling.number("resend_interval", settings.resend_interval, Range::between(0.001, 10.0));
+  settings.chunk_values =
+      coupling.integer("chunk_values", settings.chunk_values, Range::between(16, 16384));
+  return settings;
+}
+
+// parsers == nullptr: a resolved file, checked when its run started.
+Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
+                  const std::map<std::string, ParticipantParser>* parsers) {
+  const auto& kinds = participant_roles();
+  Scene scene;
+  scene.file = file;
+  scene.resolved = YAML::Node(YAML::NodeType::Map);
+  Section root = Section::root(document, file, scene.resolved);
+  scene.name = root.text("name");
+  scene.description = root.text("description", "");
+  scene.duration = root.number("duration", Range::positive());
+  scene.coupling = parse_coupling(root.child("coupling"));
+  scene.output_interval = root.number("output_interval", scene.duration / 100.0, Range::positive());
+
+  Section participants = root.child("participants");
+  for (const std::string& name : participants.keys()) {
+    const auto kind = kinds.find(name);
+    if (kind == kinds.end()) {
+      std::string known;
+      for (const auto& [known_name, unused] : kinds) known += (known.empty() ? "" : ", ") + known_name;
+      participants.fail(name, "unknown participant; known participants: " + known);
+    }
+    Section section = participants.child(name);
+    ParticipantEntry entry{name, name, name, kind->second};
+    if (name == "replay") {
+      // A replay stands in for the participant whose messages it plays back.
+      entry.acts_as = section.text("participant");
+      const auto replayed = kinds.find(entry.acts_as);
+      if (replayed == kinds.end() || entry.acts_as == "replay") {
+        section.fail("participant", "cannot replay unknown participant '" + entry.acts_as + "'");
+      }
+      entry.role = replayed->second;
+    }
+    if (parsers) {
+      const auto parser = parsers->find(name);
+      if (parser == parsers->end()) participants.fail(name, "this program cannot run '" + name + "'");
+      parser->second(section);
+    }
+    scene.participants.push_back(entry);
+  }
+  if (scene.participants.empty()) participants.fail("participants", "a scene needs a participant");
+  int flows = 0;
+  for (const auto& entry : scene.participants) flows += entry.role == Role::flow;
+  if (flows > 1) participants.fail("participants", "a scene has at most one flow provider");
+  for (std::size_t i = 0; i < scene.participants.size(); ++i) {
+    for (std::size_t j = i + 1; j < scene.participants.size(); ++j) {
+      if (scene.participants[i].acts_as == scene.participants[j].acts_as) {
+        participants.fail(scene.participants[j].name,
+                          "two participants would both act as '" + scene.participants[j].acts_as + "'");
+      }
+    }
+  }
+  if (scene.coupling.adaptive_window && flows == 0) {
+    root.child("coupling").fail("adaptive_window", "needs a flow provider to set the window");
+  }
+  std::stable_partition(scene.participants.begin(), scene.participants.end(),
+                        [](const ParticipantEntry& entry) { return entry.role == Role::flow; });
+  if (parsers) root.finish();
+  return scene;
+}
+
+}  // namespace
+
+Scene load_scene(const std::filesystem::path& bundle_or_file,
+                 const std::map<std::string, ParticipantParser>& parsers) {
+  const std::filesystem::path file = std::filesystem::is_directory(bundle_or_file)
+                                         ? bundle_or_file / "scenario.yaml"
+                                         : bundle_or_file;
+  return parse_scene(load_yaml_file(file), file, &parsers);
+}
+
+Scene load_resolved_scene(const std::filesystem::path& file) {
+  return parse_scene(load_yaml_file(file), file, nullptr);
+}
+
+}  // namespace cosim::scenario
