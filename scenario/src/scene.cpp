@@ -79,15 +79,18 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
 
   Section participants = root.child("participants");
   for (const std::string& name : participants.keys()) {
-    const auto kind = kinds.find(name);
+    // Several replays may stand in for several participants: replay, replay_fluid, ...
+    const bool is_replay = name.rfind("replay", 0) == 0;
+    const std::string kind_name = is_replay ? "replay" : name;
+    const auto kind = kinds.find(kind_name);
     if (kind == kinds.end()) {
       std::string known;
       for (const auto& [known_name, unused] : kinds) known += (known.empty() ? "" : ", ") + known_name;
       participants.fail(name, "unknown participant; known participants: " + known);
     }
     Section section = participants.child(name);
-    ParticipantEntry entry{name, name, name, kind->second};
-    if (name == "replay") {
+    ParticipantEntry entry{name, kind_name, name, kind->second};
+    if (is_replay) {
       // A replay stands in for the participant whose messages it plays back.
       entry.acts_as = section.text("participant");
       const auto replayed = kinds.find(entry.acts_as);
@@ -97,7 +100,7 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
       entry.role = replayed->second;
     }
     if (parsers) {
-      const auto parser = parsers->find(name);
+      const auto parser = parsers->find(kind_name);
       if (parser == parsers->end()) participants.fail(name, "this program cannot run '" + name + "'");
       parser->second(section);
     }

@@ -1,0 +1,81 @@
+// The data a flow provider and its solids exchange, and which window each side reads. Both
+// sides use these names and rules, so a scene's scheme is decided in one place.
+//
+// Every window k (0 = initial state, dt = 0):
+//   solid S publishes  "positions", "velocities" (3 per node or element) and "drag" (the mean
+//                      force the fluid exerted on each node over the window; the flow takes
+//                      minus it), all of window k;
+//   the flow publishes "ambient_velocity@S" (3 per node) and "water_fraction@S" (1 per node)
+//                      at the end of window k, sampled where S's nodes were at the end of the
+//                      window it read.
+// The flow in window k reads the solids' window k-1 (window 0: window 0). A solid in window k
+// reads the flow's windows k-1 (begin) and k (end) in the serial-explicit scheme, and window
+// k-1 for both in the parallel-explicit scheme, so flow and solids compute at the same time.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cosim::coupler::exchange {
+
+inline constexpr const char* kPositions = "positions";
+inline constexpr const char* kVelocities = "velocities";
+inline constexpr const char* kDrag = "drag";
+
+inline std::string ambient_velocity_field(const std::string& solid) {
+  return "ambient_velocity@" + solid;
+}
+inline std::string water_fraction_field(const std::string& solid) {
+  return "water_fraction@" + solid;
+}
+
+// Window of the solids' data the flow uses in window `flow_window`.
+inline int64_t solid_window_for_flow(int64_t flow_window) {
+  return std::max<int64_t>(flow_window - 1, 0);
+}
+
+struct FlowWindows {
+  int64_t begin = 0;  // ambient at the start of the window
+  int64_t end = 0;    // ambient at the end of the window
+};
+// Windows of flow data a solid uses in window `solid_window` (>= 1).
+inline FlowWindows flow_windows_for_solid(int64_t solid_window, bool serial_scheme) {
+  const int64_t previous = std::max<int64_t>(solid_window - 1, 0);
+  return serial_scheme ? FlowWindows{previous, solid_window} : FlowWindows{previous, previous};
+}
+
+inline std::vector<double> pack(std::span<const Eigen::Vector3d> vectors) {
+  std::vector<double> values;
+  values.reserve(vectors.size() * 3);
+  for (const auto& vector : vectors) values.insert(values.end(), {vector.x(), vector.y(), vector.z()});
+  return values;
+}
+
+// `what` names the field and sender for the error message.
+inline std::vector<Eigen::Vector3d> unpack(std::span<const double> values, std::size_t expected,
+                                           const std::string& what) {
+  if (values.size() != expected * 3) {
+    throw std::runtime_error(what + ": expected " + std::to_string(expected * 3) +
+                             " values (3 per point), got " + std::to_string(values.size()));
+  }
+  std::vector<Eigen::Vector3d> vectors(expected);
+  for (std::size_t i = 0; i < expected; ++i) {
+    vectors[i] = Eigen::Vector3d(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+  }
+  return vectors;
+}
+
+inline std::vector<Eigen::Vector3d> unpack(std::span<const double> values, const std::string& what) {
+  if (values.size() % 3 != 0) {
+    throw std::runtime_error(what + ": " + std::to_string(values.size()) +
+                             " values is not a whole number of 3-vectors");
+  }
+  return unpack(values, values.size() / 3, what);
+}
+
+}  // namespace cosim::coupler::exchange

@@ -1,0 +1,112 @@
+// cosim: runs scenario bundles, validates them, and replays recorded runs.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <cstdlib>
+
+#include "network.hpp"
+#include "replay_command.hpp"
+#include "runner.hpp"
+
+namespace {
+
+using namespace cosim;
+
+// Checked before the network, so a bad scenario is reported before anything starts.
+scenario::Scene load_checked(const std::filesystem::path& bundle) {
+  return scenario::load_scene(bundle, tool::participant_parsers());
+}
+
+std::map<std::string, std::string> parse_faults(const std::vector<std::string>& faults) {
+  std::map<std::string, std::string> parsed;
+  for (const auto& fault : faults) {
+    const auto colon = fault.find(':');
+    if (colon == std::string::npos || fault.find('@') == std::string::npos) {
+      throw CLI::ValidationError("--fault", "expected PARTICIPANT:KIND@WINDOW, got '" + fault + "'");
+    }
+    parsed[fault.substr(0, colon)] = fault.substr(colon + 1);
+  }
+  return parsed;
+}
+
+// Returns true when the caller should go on in this process.
+bool ensure_network(const std::string& mode, int argc, char** argv) {
+  if (mode == "host" || std::getenv(tool::kPrivateNetworkVariable)) return true;
+  if (mode == "auto" && tool::multicast_available()) return true;
+  const std::string problem = tool::reexec_in_private_network(argc, argv);
+  throw std::runtime_error(problem);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cosim: particle co-simulation of river flows with plants and debris"};
+  app.require_subcommand(1);
+
+  std::filesystem::path bundle;
+  tool::RunRequest request;
+  std::vector<std::string> faults;
+  std::string network = "auto";
+  bool quiet = false;
+  auto add_run_options = [&](CLI::App* command) {
+    command->add_option("--runs-dir", request.runs_dir, "where run folders are made")
+        ->default_val("runs");
+    command->add_option("--inject-loss", request.loss_probability,
+                        "drop this fraction of the messages each process receives (testing)")
+        ->check(CLI::Range(0.0, 0.5));
+    command->add_option("--fault", faults,
+                        "make a participant fail (testing): NAME:exit@W, NAME:hang@W, NAME:throw@W");
+    command->add_option("--network", network,
+                        "auto: private network namespace when multicast is unavailable; host; "
+                        "private")
+        ->check(CLI::IsMember({"auto", "host", "private"}));
+    command->add_flag("--quiet", quiet, "no progress line");
+  };
+
+  auto* run = app.add_subcommand("run", "run a scenario bundle");
+  run->add_option("bundle", bundle, "scenario folder (or its scenario.yaml)")->required();
+  add_run_options(run);
+
+  auto* validate = app.add_subcommand("validate", "check a scenario bundle without running it");
+  validate->add_option("bundle", bundle, "scenario folder (or its scenario.yaml)")->required();
+
+  tool::ReplayRequest replay;
+  auto* replay_command = app.add_subcommand(
+      "replay", "drive one solver from a recorded run and check its outputs bit for bit");
+  replay_command->add_option("run_dir", replay.recorded_run, "a run folder")->required()
+      ->check(CLI::ExistingDirectory);
+  replay_command->add_option("--participant", replay.participant, "the solver to drive")
+      ->required();
+  add_run_options(replay_command);
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    request.faults = parse_faults(faults);
+    request.show_progress = !quiet;
+    if (validate->parsed()) {
+      const auto scene = load_checked(bundle);
+      fmt::print("{}: valid ({} participants, {} windows of {} s)\n", scene.file.string(),
+                 scene.participants.size(), scene.total_windows(), scene.coupling.window);
+      return 0;
+    }
+    if (run->parsed()) {
+      const auto scene = load_checked(bundle);
+      if (!ensure_network(network, argc, argv)) return 2;
+      const auto outcome = tool::run_scene(scene, request);
+      tool::print_report(outcome.run_dir);
+      return outcome.exit_code;
+    }
+    if (replay_command->parsed()) {
+      if (!ensure_network(network, argc, argv)) return 2;
+      replay.run = request;
+      return tool::replay_run(replay);
+    }
+  } catch (const scenario::ScenarioError& error) {
+    fmt::print(stderr, "error: {}\n", error.what());
+    return 2;
+  } catch (const std::exception& error) {
+    fmt::print(stderr, "error: {}\n", error.what());
+    return 2;
+  }
+  return 0;
+}

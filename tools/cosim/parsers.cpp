@@ -1,0 +1,17 @@
+// Every participant kind `cosim` can start, with the parser that checks its section before the
+// run begins (the process parses the same section again with the same code).
+#include "cosim/prescribed_flow/config.hpp"
+#include "cosim/replay/config.hpp"
+#include "runner.hpp"
+
+namespace cosim::tool {
+
+const std::map<std::string, scenario::ParticipantParser>& participant_parsers() {
+  static const std::map<std::string, scenario::ParticipantParser> parsers{
+      {"prescribed_flow", [](scenario::Section& section) { prescribed_flow::parse_settings(section); }},
+      {"replay", [](scenario::Section& section) { replay::parse_settings(section); }},
+  };
+  return parsers;
+}
+
+}  // namespace cosim::tool
