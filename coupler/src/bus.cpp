@@ -96,8 +96,8 @@ void Bus::publish_field(const Stamp& stamp, const std::string& field,
   std::lock_guard lock(publish_mutex_);
   const std::string sender = as_sender.empty() ? options_.name : as_sender;
   const auto chunk_values = static_cast<std::size_t>(options_.chunk_values);
-  const auto chunk_count =
-      static_cast<int32_t>(std::max<std::size_t>(1, (values.size() + chunk_values - 1) / chunk_values));
+  const auto chunk_count = static_cast<int32_t>(
+      std::max<std::size_t>(1, (values.size() + chunk_values - 1) / chunk_values));
   std::vector<cosim_msgs::field_chunk_t> chunks(chunk_count);
   for (int32_t index = 0; index < chunk_count; ++index) {
     auto& chunk = chunks[index];
@@ -269,7 +269,9 @@ std::optional<std::vector<double>> Bus::field_values(const FieldKey& key) {
   return found->second;
 }
 
-bool Bus::has_field(const FieldKey& key) const { return completed_.contains(key); }
+bool Bus::has_field(const FieldKey& key) const {
+  return completed_.contains(key);
+}
 
 std::vector<int32_t> Bus::missing_chunks(const FieldKey& key) const {
   std::vector<int32_t> missing;
@@ -293,6 +295,8 @@ std::optional<std::chrono::steady_clock::time_point> Bus::last_heard(
   return found->second;
 }
 
-Bus::Counters Bus::counters() const { return counters_; }
+Bus::Counters Bus::counters() const {
+  return counters_;
+}
 
 }  // namespace cosim::coupler

@@ -39,15 +39,16 @@ Coupler::Coupler(const scenario::Scene& scene, CouplerOptions options)
 
 void Coupler::check_processes(ProcessGroup& processes, const std::string& during) {
   for (const auto& exit : processes.poll_exits()) {
-    throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(), during, exit.name));
+    throw Failure(
+        fmt::format("{} during {} (see logs/{}.log)", exit.describe(), during, exit.name));
   }
 }
 
 void Coupler::check_silence(const std::vector<std::string>& pending, const std::string& during) {
   for (const auto& name : pending) {
     const auto heard = bus_->last_heard(name);
-    if (heard && std::chrono::duration<double>(Clock::now() - *heard).count() >
-                     scene_.coupling.timeout) {
+    if (heard &&
+        std::chrono::duration<double>(Clock::now() - *heard).count() > scene_.coupling.timeout) {
       throw Failure(fmt::format("'{}' stopped answering during {}: silent for more than {:.1f} s",
                                 name, during, scene_.coupling.timeout));
     }
@@ -60,8 +61,7 @@ void Coupler::handshake(ProcessGroup& processes) {
   const auto start = Clock::now();
   while (!pending.empty()) {
     if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
-      bus_->publish_window(Stamp{0, 0.0, 0.0}, window_t::COMMAND_HANDSHAKE,
-                           scene_.total_windows());
+      bus_->publish_window(Stamp{0, 0.0, 0.0}, window_t::COMMAND_HANDSHAKE, scene_.total_windows());
       last_broadcast = Clock::now();
     }
     bus_->poll(scene_.coupling.resend_interval);
@@ -70,8 +70,8 @@ void Coupler::handshake(ProcessGroup& processes) {
       const status_t status = statuses.front();
       statuses.pop_front();
       if (status.state == status_t::STATE_FAILED) {
-        throw Failure(fmt::format("'{}' failed while starting: {}", status.header.sender,
-                                  status.message));
+        throw Failure(
+            fmt::format("'{}' failed while starting: {}", status.header.sender, status.message));
       }
       if (status.state == status_t::STATE_READY) std::erase(pending, status.header.sender);
     }
@@ -115,8 +115,8 @@ void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, do
       report.compute_seconds = status.compute_seconds;
       report.wait_seconds = status.wait_seconds;
       if (status.stable_dt > 0.0) {
-        next_stable_dt_ = next_stable_dt_ > 0.0 ? std::min(next_stable_dt_, status.stable_dt)
-                                                : status.stable_dt;
+        next_stable_dt_ =
+            next_stable_dt_ > 0.0 ? std::min(next_stable_dt_, status.stable_dt) : status.stable_dt;
       }
     }
     check_processes(processes, during);
@@ -167,8 +167,8 @@ void Coupler::show_progress(int64_t index, double time, bool force) {
   if (!force && seconds_since(last_progress_) < 1.0) return;
   last_progress_ = Clock::now();
   const int64_t total = scene_.total_windows();
-  fmt::print(stderr, "\r[{}] window {}/{}  t = {:.4f} s of {:.4f} s  wall {:.1f} s   ",
-             scene_.name, index, total, time, scene_.duration, seconds_since(started_));
+  fmt::print(stderr, "\r[{}] window {}/{}  t = {:.4f} s of {:.4f} s  wall {:.1f} s   ", scene_.name,
+             index, total, time, scene_.duration, seconds_since(started_));
   if (force) fmt::print(stderr, "\n");
 }
 
@@ -192,7 +192,10 @@ RunResult Coupler::run(ProcessGroup& processes) {
       dt = std::min(dt, scene_.duration - time);
       if (dt <= scene_.duration * 1e-12) break;
       run_window(processes, index, time, dt);
-      time += dt;
+      // Fixed windows: no round-off drift over long runs.
+      time = scene_.coupling.adaptive_window
+                 ? time + dt
+                 : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
       result.windows_completed = index;
       show_progress(index, time, false);
       if (scene_.coupling.adaptive_window && index == result.total_windows &&
@@ -207,8 +210,8 @@ RunResult Coupler::run(ProcessGroup& processes) {
     if (options_.show_progress) fmt::print(stderr, "\n");
     result.failure = failure.what();
     for (int repeat = 0; repeat < 3; ++repeat) {
-      bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_ABORT,
-                           scene_.total_windows(), result.failure);
+      bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_ABORT, scene_.total_windows(),
+                           result.failure);
       bus_->poll(0.01);
     }
     processes.terminate_all();

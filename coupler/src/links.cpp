@@ -26,10 +26,9 @@ AmbientFlow SolidLink::receive(int64_t flow_window) {
   const std::string me = participant_.name();
   const std::string velocity_field = exchange::ambient_velocity_field(me);
   const std::string water_field = exchange::water_fraction_field(me);
-  flow.velocity = exchange::unpack(participant_.receive(flow_name_, velocity_field, flow_window),
-                                   point_count_,
-                                   fmt::format("field '{}' from '{}' (window {})", velocity_field,
-                                               flow_name_, flow_window));
+  flow.velocity = exchange::unpack(
+      participant_.receive(flow_name_, velocity_field, flow_window), point_count_,
+      fmt::format("field '{}' from '{}' (window {})", velocity_field, flow_name_, flow_window));
   flow.water_fraction = participant_.receive(flow_name_, water_field, flow_window);
   if (flow.water_fraction.size() != point_count_) {
     throw CouplingError(fmt::format("field '{}' from '{}' (window {}): expected {} values, got {}",

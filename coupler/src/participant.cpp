@@ -33,9 +33,13 @@ Participant::~Participant() {
   if (heartbeat_.joinable()) heartbeat_.join();
 }
 
-double Participant::compute_seconds() const { return seconds_since(started_) - wait_seconds_; }
+double Participant::compute_seconds() const {
+  return seconds_since(started_) - wait_seconds_;
+}
 
-Stamp Participant::stamp() const { return Stamp{current_.index, current_.time, current_.dt}; }
+Stamp Participant::stamp() const {
+  return Stamp{current_.index, current_.time, current_.dt};
+}
 
 void Participant::publish_state(int8_t state, int steps, double stable_dt,
                                 const std::string& message) {
@@ -110,8 +114,8 @@ Window Participant::next_window() {
           }
           if (message.command == cosim_msgs::window_t::COMMAND_ADVANCE &&
               index != current_.index + 1) {
-            throw CouplingError(fmt::format("window {} arrived after window {}: a window was skipped",
-                                            index, current_.index));
+            throw CouplingError(fmt::format(
+                "window {} arrived after window {}: a window was skipped", index, current_.index));
           }
           current_.index = index;
           current_.time = message.header.sim_time;
@@ -125,9 +129,9 @@ Window Participant::next_window() {
       }
     }
     if (seconds_since(last_coupler_message) > options_.timeout) {
-      throw CouplingError(fmt::format(
-          "the coupler has been silent for {:.1f} s while '{}' waited for window {}",
-          options_.timeout, options_.name, current_.index + 1));
+      throw CouplingError(
+          fmt::format("the coupler has been silent for {:.1f} s while '{}' waited for window {}",
+                      options_.timeout, options_.name, current_.index + 1));
     }
     bus_->poll(options_.resend_interval);
   }

@@ -14,7 +14,8 @@
 namespace cosim::coupler {
 
 std::string ChildExit::describe() const {
-  if (signaled) return fmt::format("'{}' was killed by signal {} ({})", name, signal, strsignal(signal));
+  if (signaled)
+    return fmt::format("'{}' was killed by signal {} ({})", name, signal, strsignal(signal));
   return fmt::format("'{}' exited with code {}", name, exit_code);
 }
 
@@ -31,12 +32,13 @@ void ProcessGroup::start(const std::string& name, const std::vector<std::string>
                          const std::filesystem::path& log_file) {
   if (arguments.empty()) throw std::invalid_argument("no command for " + name);
   if (access(arguments[0].c_str(), X_OK) != 0) {
-    throw std::runtime_error(fmt::format("cannot start '{}': {} is not an executable file", name,
-                                         arguments[0]));
+    throw std::runtime_error(
+        fmt::format("cannot start '{}': {} is not an executable file", name, arguments[0]));
   }
   const int log_fd = open(log_file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (log_fd < 0) {
-    throw std::runtime_error(fmt::format("cannot open log {}: {}", log_file.string(), strerror(errno)));
+    throw std::runtime_error(
+        fmt::format("cannot open log {}: {}", log_file.string(), strerror(errno)));
   }
   std::vector<char*> argv;
   for (const auto& argument : arguments) argv.push_back(const_cast<char*>(argument.c_str()));

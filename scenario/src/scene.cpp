@@ -7,7 +7,9 @@
 
 namespace cosim::scenario {
 
-std::string role_name(Role role) { return role == Role::flow ? "flow" : "solid"; }
+std::string role_name(Role role) {
+  return role == Role::flow ? "flow" : "solid";
+}
 
 const std::map<std::string, Role>& participant_roles() {
   static const std::map<std::string, Role> roles{{"fluid_mps", Role::flow},
@@ -54,7 +56,8 @@ CouplingSettings parse_coupling(Section coupling) {
       coupling.text("scheme", settings.scheme, {"serial-explicit", "parallel-explicit"});
   settings.window = coupling.number("window", Range::positive());
   settings.adaptive_window = coupling.flag("adaptive_window", settings.adaptive_window);
-  settings.interpolation = coupling.text("interpolation", settings.interpolation, {"linear", "hold"});
+  settings.interpolation =
+      coupling.text("interpolation", settings.interpolation, {"linear", "hold"});
   settings.timeout = coupling.number("timeout", settings.timeout, Range::between(0.1, 3600.0));
   settings.resend_interval =
       coupling.number("resend_interval", settings.resend_interval, Range::between(0.001, 10.0));
@@ -85,7 +88,8 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
     const auto kind = kinds.find(kind_name);
     if (kind == kinds.end()) {
       std::string known;
-      for (const auto& [known_name, unused] : kinds) known += (known.empty() ? "" : ", ") + known_name;
+      for (const auto& [known_name, unused] : kinds)
+        known += (known.empty() ? "" : ", ") + known_name;
       participants.fail(name, "unknown participant; known participants: " + known);
     }
     Section section = participants.child(name);
@@ -101,8 +105,9 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
     }
     if (parsers) {
       const auto parser = parsers->find(kind_name);
-      if (parser == parsers->end()) participants.fail(name, "this program cannot run '" + name + "'");
-      parser->second(section);
+      if (parser == parsers->end())
+        participants.fail(name, "this program cannot run '" + name + "'");
+      parser->second(section, scene);
     }
     scene.participants.push_back(entry);
   }
@@ -113,8 +118,8 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
   for (std::size_t i = 0; i < scene.participants.size(); ++i) {
     for (std::size_t j = i + 1; j < scene.participants.size(); ++j) {
       if (scene.participants[i].acts_as == scene.participants[j].acts_as) {
-        participants.fail(scene.participants[j].name,
-                          "two participants would both act as '" + scene.participants[j].acts_as + "'");
+        participants.fail(scene.participants[j].name, "two participants would both act as '" +
+                                                          scene.participants[j].acts_as + "'");
       }
     }
   }

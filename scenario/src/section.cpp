@@ -15,8 +15,8 @@ YAML::Node load_yaml_file(const std::filesystem::path& file) {
   try {
     return YAML::LoadFile(file.string());
   } catch (const YAML::Exception& error) {
-    throw ScenarioError(fmt::format("{}:{}: YAML syntax error: {}", file.string(),
-                                    error.mark.line + 1, error.msg));
+    throw ScenarioError(
+        fmt::format("{}:{}: YAML syntax error: {}", file.string(), error.mark.line + 1, error.msg));
   }
 }
 
@@ -45,14 +45,19 @@ std::string Section::dotted(const std::string& key) const {
 }
 
 int Section::line_of(const std::string& key) const {
-  if (node_ && node_.IsMap() && node_[key]) return node_[key].Mark().line + 1;
+  if (node_ && node_.IsMap()) {
+    // The key's own line (a mapping value starts on the next line).
+    for (const auto& item : node_) {
+      if (item.first.Scalar() == key) return item.first.Mark().line + 1;
+    }
+  }
   if (node_) return node_.Mark().line + 1;
   return 1;
 }
 
 void Section::fail(const std::string& key, const std::string& problem) const {
-  throw ScenarioError(
-      fmt::format("{}:{}: key '{}': {}", source_->file.string(), line_of(key), dotted(key), problem));
+  throw ScenarioError(fmt::format("{}:{}: key '{}': {}", source_->file.string(), line_of(key),
+                                  dotted(key), problem));
 }
 
 bool Section::has(const std::string& key) const {
@@ -123,8 +128,8 @@ int Section::integer(const std::string& key, Range range) {
     if (!value.IsScalar()) throw YAML::Exception(value.Mark(), "");
     result = value.as<int>();
   } catch (const YAML::Exception&) {
-    fail(key, "expected an integer, got '" + (value.IsScalar() ? value.Scalar() : "a collection") +
-                  "'");
+    fail(key,
+         "expected an integer, got '" + (value.IsScalar() ? value.Scalar() : "a collection") + "'");
   }
   check_range(key, result, range);
   resolved_[key] = result;
@@ -181,7 +186,8 @@ std::vector<double> Section::numbers(const std::string& key, Range range) {
 
 Eigen::Vector3d Section::vector3(const std::string& key) {
   const std::vector<double> values = numbers(key);
-  if (values.size() != 3) fail(key, fmt::format("expected 3 numbers [x, y, z], got {}", values.size()));
+  if (values.size() != 3)
+    fail(key, fmt::format("expected 3 numbers [x, y, z], got {}", values.size()));
   return {values[0], values[1], values[2]};
 }
 
@@ -210,7 +216,8 @@ Section Section::child(const std::string& key) {
 
 Section Section::optional_child(const std::string& key) {
   mark_read(key);
-  if (!has(key)) return Section(YAML::Node(YAML::NodeType::Map), dotted(key), source_, resolved_[key]);
+  if (!has(key))
+    return Section(YAML::Node(YAML::NodeType::Map), dotted(key), source_, resolved_[key]);
   return child(key);
 }
 

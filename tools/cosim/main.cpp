@@ -1,6 +1,6 @@
 // cosim: runs scenario bundles, validates them, and replays recorded runs.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdlib>
 
@@ -22,7 +22,8 @@ std::map<std::string, std::string> parse_faults(const std::vector<std::string>& 
   for (const auto& fault : faults) {
     const auto colon = fault.find(':');
     if (colon == std::string::npos || fault.find('@') == std::string::npos) {
-      throw CLI::ValidationError("--fault", "expected PARTICIPANT:KIND@WINDOW, got '" + fault + "'");
+      throw CLI::ValidationError("--fault",
+                                 "expected PARTICIPANT:KIND@WINDOW, got '" + fault + "'");
     }
     parsed[fault.substr(0, colon)] = fault.substr(colon + 1);
   }
@@ -51,14 +52,17 @@ int main(int argc, char** argv) {
   auto add_run_options = [&](CLI::App* command) {
     command->add_option("--runs-dir", request.runs_dir, "where run folders are made")
         ->default_val("runs");
-    command->add_option("--inject-loss", request.loss_probability,
-                        "drop this fraction of the messages each process receives (testing)")
+    command
+        ->add_option("--inject-loss", request.loss_probability,
+                     "drop this fraction of the messages each process receives (testing)")
         ->check(CLI::Range(0.0, 0.5));
-    command->add_option("--fault", faults,
-                        "make a participant fail (testing): NAME:exit@W, NAME:hang@W, NAME:throw@W");
-    command->add_option("--network", network,
-                        "auto: private network namespace when multicast is unavailable; host; "
-                        "private")
+    command->add_option(
+        "--fault", faults,
+        "make a participant fail (testing): NAME:exit@W, NAME:hang@W, NAME:throw@W");
+    command
+        ->add_option("--network", network,
+                     "auto: private network namespace when multicast is unavailable; host; "
+                     "private")
         ->check(CLI::IsMember({"auto", "host", "private"}));
     command->add_flag("--quiet", quiet, "no progress line");
   };
@@ -73,7 +77,8 @@ int main(int argc, char** argv) {
   tool::ReplayRequest replay;
   auto* replay_command = app.add_subcommand(
       "replay", "drive one solver from a recorded run and check its outputs bit for bit");
-  replay_command->add_option("run_dir", replay.recorded_run, "a run folder")->required()
+  replay_command->add_option("run_dir", replay.recorded_run, "a run folder")
+      ->required()
       ->check(CLI::ExistingDirectory);
   replay_command->add_option("--participant", replay.participant, "the solver to drive")
       ->required();

@@ -1,8 +1,8 @@
 #include "network.hpp"
 
-#include <lcm/lcm-cpp.hpp>
 #include <stdlib.h>
 #include <unistd.h>
+#include <lcm/lcm-cpp.hpp>
 
 #include <cerrno>
 #include <cstring>
@@ -20,7 +20,10 @@ bool multicast_available() {
 
 std::string reexec_in_private_network(int argc, char** argv) {
   setenv(kPrivateNetworkVariable, "1", 1);
-  std::vector<std::string> words{"unshare", "-rn", "sh", "-c",
+  std::vector<std::string> words{"unshare",
+                                 "-rn",
+                                 "sh",
+                                 "-c",
                                  "ip link set lo up && ip route add 224.0.0.0/4 dev lo && "
                                  "exec \"$0\" \"$@\"",
                                  "/proc/self/exe"};

@@ -1,5 +1,6 @@
 // Every participant kind `cosim` can start, with the parser that checks its section before the
 // run begins (the process parses the same section again with the same code).
+#include "config.hpp"
 #include "cosim/prescribed_flow/config.hpp"
 #include "cosim/replay/config.hpp"
 #include "runner.hpp"
@@ -8,8 +9,14 @@ namespace cosim::tool {
 
 const std::map<std::string, scenario::ParticipantParser>& participant_parsers() {
   static const std::map<std::string, scenario::ParticipantParser> parsers{
-      {"prescribed_flow", [](scenario::Section& section) { prescribed_flow::parse_settings(section); }},
-      {"replay", [](scenario::Section& section) { replay::parse_settings(section); }},
+      {"prescribed_flow", [](scenario::Section& section,
+                             const scenario::Scene&) { prescribed_flow::parse_settings(section); }},
+      {"replay",
+       [](scenario::Section& section, const scenario::Scene&) { replay::parse_settings(section); }},
+      {"vegetation_beam",
+       [](scenario::Section& section, const scenario::Scene& scene) {
+         vegetation::parse_config(section, scene.output_interval);
+       }},
   };
   return parsers;
 }

@@ -13,11 +13,13 @@ namespace cosim::tool {
 namespace {
 
 // Compares every frame of two output files bit for bit; returns the first difference.
-std::string compare_outputs(const std::filesystem::path& expected, const std::filesystem::path& actual) {
+std::string compare_outputs(const std::filesystem::path& expected,
+                            const std::filesystem::path& actual) {
   if (!std::filesystem::exists(actual)) return "missing from the replayed run";
   const int frames = output::count_point_frames(expected);
   if (frames != output::count_point_frames(actual)) {
-    return fmt::format("{} frames recorded, {} replayed", frames, output::count_point_frames(actual));
+    return fmt::format("{} frames recorded, {} replayed", frames,
+                       output::count_point_frames(actual));
   }
   auto same_bits = [](const auto& a, const auto& b) {
     return a.size() == b.size() &&
@@ -60,7 +62,8 @@ int replay_run(const ReplayRequest& request) {
                                          recorded_scenario.string(), request.participant));
   }
   if (driven->executable == "replay") {
-    throw std::runtime_error(fmt::format("'{}' was itself a replay in that run", request.participant));
+    throw std::runtime_error(
+        fmt::format("'{}' was itself a replay in that run", request.participant));
   }
   // Every partner becomes a replay of its recorded messages.
   YAML::Node participants(YAML::NodeType::Map);
@@ -109,12 +112,14 @@ int replay_run(const ReplayRequest& request) {
       ++output_files;
       const auto problem =
           compare_outputs(file.path(), outcome.run_dir / driven->acts_as / file.path().filename());
-      if (!problem.empty()) output_problems.push_back(file.path().filename().string() + ": " + problem);
+      if (!problem.empty())
+        output_problems.push_back(file.path().filename().string() + ": " + problem);
     }
   }
-  fmt::print("replayed '{}' against {}: {} windows, {} fields, {} output files compared bit for bit\n",
-             driven->acts_as, request.recorded_run.string(), expected.windows.size(), fields,
-             output_files);
+  fmt::print(
+      "replayed '{}' against {}: {} windows, {} fields, {} output files compared bit for bit\n",
+      driven->acts_as, request.recorded_run.string(), expected.windows.size(), fields,
+      output_files);
   for (std::size_t i = 0; i < mismatches.size() && i < 10; ++i) {
     fmt::print("  window {} field '{}': {}\n", mismatches[i].window, mismatches[i].field,
                mismatches[i].problem);

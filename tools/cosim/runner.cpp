@@ -20,8 +20,8 @@ int64_t new_run_id() {
   std::random_device device;
   const uint64_t high = device();
   const uint64_t low = device();
-  const auto now = static_cast<uint64_t>(
-      std::chrono::steady_clock::now().time_since_epoch().count());
+  const auto now =
+      static_cast<uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
   // Positive, and different for runs started together by one test.
   return static_cast<int64_t>(((high << 32) ^ low ^ now) & 0x7fffffffffffffffULL);
 }
@@ -57,7 +57,8 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   RunOutcome outcome;
   const int64_t run_id = new_run_id();
   const std::string url = coupler::run_lcm_url(run_id);
-  const std::string label = request.run_label.empty() ? scene.name : scene.name + "-" + request.run_label;
+  const std::string label =
+      request.run_label.empty() ? scene.name : scene.name + "-" + request.run_label;
   outcome.run_dir = make_run_dir(request.runs_dir, label, run_id);
   const auto resolved_file = outcome.run_dir / "scenario.yaml";
   {
@@ -68,8 +69,11 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   }
   for (const auto& [name, fault] : request.faults) {
     bool known = false;
-    for (const auto& entry : scene.participants) known |= entry.name == name || entry.acts_as == name;
-    if (!known) throw std::runtime_error(fmt::format("--fault names '{}', which this scene does not run", name));
+    for (const auto& entry : scene.participants)
+      known |= entry.name == name || entry.acts_as == name;
+    if (!known)
+      throw std::runtime_error(
+          fmt::format("--fault names '{}', which this scene does not run", name));
   }
 
   coupler::CouplerOptions options;
@@ -89,12 +93,15 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
                                            entry.executable, executable.string()));
     }
     std::string fault;
-    if (auto found = request.faults.find(entry.name); found != request.faults.end()) fault = found->second;
-    if (auto found = request.faults.find(entry.acts_as); found != request.faults.end()) fault = found->second;
-    processes.start(entry.name,
-                    coupler::process_arguments(executable, resolved_file, outcome.run_dir, entry.name,
-                                               url, run_id, request.loss_probability, fault),
-                    outcome.run_dir / "logs" / (entry.name + ".log"));
+    if (auto found = request.faults.find(entry.name); found != request.faults.end())
+      fault = found->second;
+    if (auto found = request.faults.find(entry.acts_as); found != request.faults.end())
+      fault = found->second;
+    processes.start(
+        entry.name,
+        coupler::process_arguments(executable, resolved_file, outcome.run_dir, entry.name, url,
+                                   run_id, request.loss_probability, fault),
+        outcome.run_dir / "logs" / (entry.name + ".log"));
   }
   outcome.result = coupler.run(processes);
   const auto& result = outcome.result;
@@ -152,8 +159,8 @@ void print_report(const std::filesystem::path& run_dir) {
     if (!report.contains("metrics")) continue;
     for (const auto& [metric, value] : report["metrics"].items()) {
       if (value.contains("reference")) {
-        fmt::print("    {:<28} {:>12.5g} {:<6} reference {:>12.5g}  error {:>7.3f} %  ({})\n", metric,
-                   value["value"].get<double>(), value.value("unit", ""),
+        fmt::print("    {:<28} {:>12.5g} {:<6} reference {:>12.5g}  error {:>7.3f} %  ({})\n",
+                   metric, value["value"].get<double>(), value.value("unit", ""),
                    value["reference"].get<double>(), 100.0 * value["relative_error"].get<double>(),
                    value.value("reference_source", ""));
       } else {

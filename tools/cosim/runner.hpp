@@ -15,8 +15,8 @@ const std::map<std::string, scenario::ParticipantParser>& participant_parsers();
 
 struct RunRequest {
   std::filesystem::path runs_dir = "runs";
-  std::string run_label;            // appended to the scene name in the run folder's name
-  double loss_probability = 0.0;    // injected loss of received messages, every process
+  std::string run_label;                      // appended to the scene name in the run folder's name
+  double loss_probability = 0.0;              // injected loss of received messages, every process
   std::map<std::string, std::string> faults;  // participant -> "exit@W" / "hang@W" / "throw@W"
   bool show_progress = true;
 };

@@ -74,7 +74,8 @@ void PrescribedFlow::sample(double time, std::span<const Eigen::Vector3d> points
   const double ponded = settings_.kind == ProfileKind::seed004_capture ? ponded_depth(points) : 0.0;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const double z = height(points[i]);
-    const bool capture = settings_.kind == ProfileKind::seed004_capture && in_capture_region(points[i]);
+    const bool capture =
+        settings_.kind == ProfileKind::seed004_capture && in_capture_region(points[i]);
     const double surface = capture ? ponded : depth;
     if (z > surface) continue;  // in air: seed 004 gives no fluid force above the surface
     water_fraction[i] = 1.0;

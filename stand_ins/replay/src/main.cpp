@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
                                              settings.event_log.string(), window.index,
                                              settings.participant));
       }
-      for (const auto& [field, values] : recorded->second.fields) participant.publish(field, values);
+      for (const auto& [field, values] : recorded->second.fields)
+        participant.publish(field, values);
       participant.done(recorded->second.steps, recorded->second.stable_dt);
     }
   });

@@ -128,7 +128,8 @@ std::vector<Mismatch> compare_fields(const Recording& expected, const Recording&
       const auto& replayed = other->second.fields.at(field);
       if (replayed.size() != values.size()) {
         mismatches.push_back(
-            {index, field, fmt::format("{} values recorded, {} replayed", values.size(), replayed.size())});
+            {index, field,
+             fmt::format("{} values recorded, {} replayed", values.size(), replayed.size())});
         continue;
       }
       for (std::size_t i = 0; i < values.size(); ++i) {

@@ -42,12 +42,12 @@ std::string run_lcm_url(int64_t run_id);
 struct BusOptions {
   std::string url;
   int64_t run_id = 0;
-  std::string name;                    // own participant name (sender of what we publish)
-  int chunk_values = 4096;             // float64 values per field chunk
-  double loss_probability = 0.0;       // injected loss of received messages (tests)
+  std::string name;               // own participant name (sender of what we publish)
+  int chunk_values = 4096;        // float64 values per field chunk
+  double loss_probability = 0.0;  // injected loss of received messages (tests)
   uint64_t loss_seed = 1;
-  std::filesystem::path record_log;    // when set, every message heard is written here
-  int cached_windows = 4;              // windows of own fields kept for retransmission
+  std::filesystem::path record_log;  // when set, every message heard is written here
+  int cached_windows = 4;            // windows of own fields kept for retransmission
 };
 
 // Who, when and where a message belongs, as stamped into its header.

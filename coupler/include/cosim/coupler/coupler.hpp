@@ -20,7 +20,7 @@ struct CouplerOptions {
   int64_t run_id = 0;
   std::filesystem::path event_log;  // every message heard is recorded here
   double loss_probability = 0.0;
-  double startup_timeout = 60.0;    // seconds for every participant to become ready
+  double startup_timeout = 60.0;  // seconds for every participant to become ready
   bool show_progress = true;
 };
 
@@ -29,7 +29,7 @@ struct ParticipantReport {
   double compute_seconds = 0.0;
   double wait_seconds = 0.0;
   int64_t windows = 0;
-  int64_t steps = 0;  // solver steps (sub-steps for sub-cycling solids), summed over windows
+  int64_t steps = 0;         // solver steps (sub-steps for sub-cycling solids), summed over windows
   std::string metrics_json;  // the participant's final report
 };
 

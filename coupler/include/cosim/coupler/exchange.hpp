@@ -52,7 +52,8 @@ inline FlowWindows flow_windows_for_solid(int64_t solid_window, bool serial_sche
 inline std::vector<double> pack(std::span<const Eigen::Vector3d> vectors) {
   std::vector<double> values;
   values.reserve(vectors.size() * 3);
-  for (const auto& vector : vectors) values.insert(values.end(), {vector.x(), vector.y(), vector.z()});
+  for (const auto& vector : vectors)
+    values.insert(values.end(), {vector.x(), vector.y(), vector.z()});
   return values;
 }
 
@@ -70,7 +71,8 @@ inline std::vector<Eigen::Vector3d> unpack(std::span<const double> values, std::
   return vectors;
 }
 
-inline std::vector<Eigen::Vector3d> unpack(std::span<const double> values, const std::string& what) {
+inline std::vector<Eigen::Vector3d> unpack(std::span<const double> values,
+                                           const std::string& what) {
   if (values.size() % 3 != 0) {
     throw std::runtime_error(what + ": " + std::to_string(values.size()) +
                              " values is not a whole number of 3-vectors");

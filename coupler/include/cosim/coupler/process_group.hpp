@@ -13,8 +13,8 @@ namespace cosim::coupler {
 
 struct ChildExit {
   std::string name;
-  int exit_code = 0;     // valid when !signaled
-  int signal = 0;        // valid when signaled
+  int exit_code = 0;  // valid when !signaled
+  int signal = 0;     // valid when signaled
   bool signaled = false;
   std::string describe() const;
 };

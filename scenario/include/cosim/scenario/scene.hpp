@@ -40,7 +40,7 @@ struct Scene {
   double output_interval = 0.0;
   CouplingSettings coupling;
   std::vector<ParticipantEntry> participants;  // flow provider first, then solids
-  YAML::Node resolved;                          // every value used, defaults included
+  YAML::Node resolved;                         // every value used, defaults included
 
   int total_windows() const;
   const ParticipantEntry* flow() const;
@@ -48,8 +48,10 @@ struct Scene {
   const ParticipantEntry& participant(const std::string& acts_as) const;
 };
 
-// Checks one participant's section (throws ScenarioError naming file, line, key).
-using ParticipantParser = std::function<void(Section& section)>;
+// Checks one participant's section (throws ScenarioError naming file, line, key). The scene's
+// top level (duration, coupling, output_interval) is already read when it is called.
+struct Scene;
+using ParticipantParser = std::function<void(Section& section, const Scene& scene)>;
 
 // Every participant a scene may name, with its role ("replay" takes its replayed one's role).
 const std::map<std::string, Role>& participant_roles();

@@ -1,0 +1,33 @@
+// Running `cosim` from tests: output captured, exit code and wall time measured.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace cosim::testing {
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+  double seconds = 0.0;
+};
+
+// Runs a shell command (with a hard time limit, so a hang fails the test instead of blocking it).
+CommandResult run_command(const std::string& command, int time_limit_seconds = 120);
+
+// `cosim` with arguments, from the build's bin folder.
+CommandResult run_cosim(const std::string& arguments, int time_limit_seconds = 120);
+
+// The run folder a `cosim run` printed, or empty.
+std::filesystem::path run_folder_of(const CommandResult& result);
+
+nlohmann::json read_summary(const std::filesystem::path& run_dir);
+
+// A fresh folder for one test's runs.
+std::filesystem::path fresh_folder(const std::string& name);
+
+std::filesystem::path test_scene(const std::string& name);
+
+}  // namespace cosim::testing

@@ -1,0 +1,116 @@
+// Scenario files: checked values, errors naming file, line and key, and the resolved scenario.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "cosim/scenario/scene.hpp"
+
+namespace cosim::scenario {
+namespace {
+
+std::filesystem::path write(const std::string& name, const std::string& yaml) {
+  const auto folder = std::filesystem::temp_directory_path() / ("cosim-scene-" + name);
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder / "scenario.yaml") << yaml;
+  return folder;
+}
+
+// A parser for a made-up solid: reads two keys, one with a default.
+std::map<std::string, ParticipantParser> parsers() {
+  auto solid = [](Section& section, const Scene&) {
+    section.number("stiffness", Range::positive());
+    section.integer("links", 10, Range::between(1, 100));
+  };
+  auto flow = [](Section& section, const Scene&) { section.vector3("velocity"); };
+  return {{"vegetation_beam", solid}, {"prescribed_flow", flow}, {"debris_dem", solid},
+          {"replay", [](Section& section, const Scene&) { section.text("participant"); }}};
+}
+
+const char* kScene = R"(name: test
+duration: 1.0
+coupling:
+  window: 0.1
+participants:
+  vegetation_beam:
+    stiffness: 2.0
+  prescribed_flow:
+    velocity: [1, 0, 0]
+)";
+
+std::string error_of(const std::string& yaml) {
+  try {
+    load_scene(write("error", yaml), parsers());
+  } catch (const ScenarioError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(Scene, LoadsAndOrdersTheFlowFirst) {
+  const Scene scene = load_scene(write("good", kScene), parsers());
+  EXPECT_EQ(scene.name, "test");
+  EXPECT_EQ(scene.total_windows(), 10);
+  ASSERT_EQ(scene.participants.size(), 2u);
+  EXPECT_EQ(scene.participants[0].name, "prescribed_flow");
+  EXPECT_EQ(scene.flow()->name, "prescribed_flow");
+  EXPECT_EQ(scene.solids().size(), 1u);
+  EXPECT_EQ(scene.coupling.scheme, "serial-explicit");
+}
+
+TEST(Scene, ResolvedScenarioHoldsEveryDefault) {
+  const Scene scene = load_scene(write("resolved", kScene), parsers());
+  EXPECT_EQ(scene.resolved["participants"]["vegetation_beam"]["links"].as<int>(), 10);
+  EXPECT_EQ(scene.resolved["coupling"]["scheme"].as<std::string>(), "serial-explicit");
+  EXPECT_DOUBLE_EQ(scene.resolved["coupling"]["timeout"].as<double>(), 5.0);
+  EXPECT_DOUBLE_EQ(scene.resolved["output_interval"].as<double>(), 0.01);
+}
+
+TEST(Scene, ErrorsNameFileLineAndKey) {
+  std::string scene = kScene;
+  const std::string unknown = error_of(scene + "    colour: red\n");
+  EXPECT_NE(unknown.find("scenario.yaml:10"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("participants.prescribed_flow.colour"), std::string::npos) << unknown;
+
+  std::string wrong = kScene;
+  wrong.replace(wrong.find("stiffness: 2.0"), 14, "stiffness: soft");
+  const std::string type = error_of(wrong);
+  EXPECT_NE(type.find("scenario.yaml:7"), std::string::npos) << type;
+  EXPECT_NE(type.find("participants.vegetation_beam.stiffness"), std::string::npos) << type;
+
+  std::string range = kScene;
+  range.replace(range.find("stiffness: 2.0"), 14, "stiffness: -2.");
+  const std::string out_of_range = error_of(range);
+  EXPECT_NE(out_of_range.find("scenario.yaml:7"), std::string::npos) << out_of_range;
+
+  std::string scheme = kScene;
+  scheme.replace(scheme.find("window: 0.1"), 11, "window: 0.1\n  scheme: implicit");
+  const std::string choice = error_of(scheme);
+  EXPECT_NE(choice.find("coupling.scheme"), std::string::npos) << choice;
+  EXPECT_NE(choice.find("serial-explicit"), std::string::npos) << "lists the choices: " << choice;
+}
+
+TEST(Scene, YamlSyntaxErrorsNameTheLine) {
+  const std::string error = error_of("name: x\nduration: [1\n");
+  EXPECT_NE(error.find("scenario.yaml"), std::string::npos) << error;
+}
+
+TEST(Scene, TwoFlowsAreRefused) {
+  std::string scene = kScene;
+  const std::string solid = "  vegetation_beam:\n    stiffness: 2.0\n";
+  scene.replace(scene.find(solid), solid.size(), "  replay:\n    participant: fluid_mps\n");
+  const std::string error = error_of(scene);
+  EXPECT_NE(error.find("at most one flow"), std::string::npos) << error;
+}
+
+TEST(Scene, ReplaysActAsTheirParticipant) {
+  std::string scene = kScene;
+  scene += "  replay_dem:\n    participant: debris_dem\n";
+  const Scene loaded = load_scene(write("replay", scene), parsers());
+  const auto& entry = loaded.participant("debris_dem");
+  EXPECT_EQ(entry.name, "replay_dem");
+  EXPECT_EQ(entry.executable, "replay");
+  EXPECT_EQ(entry.role, Role::solid);
+}
+
+}  // namespace
+}  // namespace cosim::scenario

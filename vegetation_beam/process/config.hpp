@@ -1,0 +1,31 @@
+// The `vegetation_beam` section of a scenario: plants, beam and fluid parameters, outputs, and
+// the reference the run is checked against.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "cosim/scenario/section.hpp"
+#include "cosim/vegetation_beam/plant_field.hpp"
+
+namespace cosim::vegetation {
+
+// The steady bent shape of one plant in a uniform stream, from the large-deflection elastica
+// (see elastica.hpp): the run's time-averaged tip position is compared with it.
+struct ElasticaReference {
+  int plant = 0;
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // the uniform stream
+  double average_over = 0.0;  // seconds at the end of the run over which the tip is averaged
+};
+
+struct VegetationConfig {
+  std::vector<PlantSpec> plants;
+  BeamParameters parameters;
+  double output_interval = 0.0;
+  std::optional<ElasticaReference> elastica_reference;
+};
+
+// `output_interval` is the scene's default for the section's own `output_interval`.
+VegetationConfig parse_config(scenario::Section& section, double scene_output_interval);
+
+}  // namespace cosim::vegetation

@@ -1,0 +1,165 @@
+// The vegetation_beam process: connects the plant library to the coupler. Each window it takes
+// the ambient flow at its nodes, sub-cycles the plants through the window and returns positions,
+// velocities and the mean drag; it writes plant shapes for ParaView and reports the tip metrics.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "config.hpp"
+#include "cosim/coupler/links.hpp"
+#include "cosim/coupler/metrics.hpp"
+#include "cosim/coupler/process_main.hpp"
+#include "cosim/output/point_series.hpp"
+#include "elastica.hpp"
+
+namespace {
+
+using namespace cosim;
+
+output::PointFrame make_frame(const vegetation::PlantField& field) {
+  output::PointFrame frame;
+  frame.time = field.time();
+  frame.positions = field.positions();
+  frame.vectors["velocity"] = field.velocities();
+  frame.vectors["drag"] = field.window_mean_drag();
+  auto& plant_label = frame.labels["plant"];
+  plant_label.resize(field.positions().size());
+  for (int plant = 0; plant < field.plant_count(); ++plant) {
+    const auto [first, last] = field.node_range(plant);
+    for (int node = first; node < last; ++node) {
+      plant_label[node] = plant;
+      if (node + 1 < last) frame.segments.push_back({node, node + 1});
+    }
+  }
+  return frame;
+}
+
+double mean_after(const std::vector<double>& times, const std::vector<double>& values,
+                  double from) {
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    if (times[i] >= from) {
+      sum += values[i];
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : values.empty() ? 0.0 : values.back();
+}
+
+void report_metrics(const vegetation::VegetationConfig& config, const vegetation::PlantField& field,
+                    const std::vector<double>& times, const std::vector<double>& tip_streamwise,
+                    const std::vector<double>& tip_height, coupler::MetricsReport& report) {
+  const int probe = config.elastica_reference ? config.elastica_reference->plant : 0;
+  const auto& spec = field.specs()[probe];
+  if (!config.elastica_reference) {
+    report.value("tip_streamwise_displacement",
+                 tip_streamwise.empty() ? 0.0 : tip_streamwise.back(), "m");
+    report.value("tip_height", tip_height.empty() ? spec.length : tip_height.back(), "m");
+    return;
+  }
+  const auto& reference = *config.elastica_reference;
+  const auto& parameters = field.parameters();
+  const Eigen::Vector3d up = spec.direction.normalized();
+  const Eigen::Vector3d across = reference.velocity - reference.velocity.dot(up) * up;
+  vegetation::ElasticaProblem problem;
+  problem.length = spec.length;
+  problem.bending_stiffness = spec.bending_stiffness > 0 ? spec.bending_stiffness
+                                                         : spec.youngs_modulus * spec.width *
+                                                               std::pow(spec.thickness, 3) / 12;
+  problem.width = spec.width;
+  problem.thickness = spec.thickness;
+  problem.plant_density = spec.density;
+  problem.fluid_density = parameters.fluid_density;
+  problem.drag_coefficient = parameters.drag_coefficient;
+  problem.speed = across.norm();
+  problem.gravity = -parameters.gravity.dot(up);
+  const auto solution = vegetation::solve_elastica(problem);
+  const double from = field.time() - reference.average_over;
+  const std::string source = "steady elastica with normal drag and buoyancy (shooting, 4000 steps)";
+  report.compare("tip_streamwise_displacement", mean_after(times, tip_streamwise, from),
+                 solution.tip_streamwise, "m", source);
+  report.compare("tip_height", mean_after(times, tip_height, from), solution.tip_height, "m",
+                 source);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return coupler::run_process(argc, argv, "vegetation_beam", [](coupler::ProcessContext& context) {
+    auto section = context.section();
+    const vegetation::VegetationConfig config =
+        vegetation::parse_config(section, context.scene.output_interval);
+    vegetation::PlantField field(config.plants, config.parameters);
+    auto& participant = *context.participant;
+    const auto node_count = static_cast<std::size_t>(field.node_count());
+    coupler::SolidLink link(participant, context.scene, node_count);
+    output::PointSeriesWriter writer(context.output_dir() / "plants", "vegetation_beam");
+    spdlog::info("{} plants, {} nodes, stable sub-step {:.3g} s", field.plant_count(), node_count,
+                 field.stable_substep());
+
+    const int probe = config.elastica_reference ? config.elastica_reference->plant : 0;
+    const Eigen::Vector3d up = field.specs()[probe].direction.normalized();
+    Eigen::Vector3d streamwise = Eigen::Vector3d::UnitX();
+    if (config.elastica_reference) {
+      const Eigen::Vector3d across =
+          config.elastica_reference->velocity - config.elastica_reference->velocity.dot(up) * up;
+      if (across.norm() > 0) streamwise = across.normalized();
+    }
+    std::vector<double> times, tip_streamwise, tip_height;
+    auto record_tip = [&] {
+      const auto [first, last] = field.node_range(probe);
+      const Eigen::Vector3d tip = field.positions()[last - 1] - field.positions()[first];
+      times.push_back(field.time());
+      tip_streamwise.push_back(tip.dot(streamwise));
+      tip_height.push_back(tip.dot(up));
+    };
+
+    const std::vector<Eigen::Vector3d> no_drag(node_count, Eigen::Vector3d::Zero());
+    double next_output = 0.0;
+    int64_t node_substeps = 0;
+    int most_substeps = 0, most_newton_iterations = 0;
+    while (true) {
+      const coupler::Window window = participant.next_window();
+      context.maybe_inject_fault(window.index);
+      if (window.finish) {
+        if (writer.frame_count() == 0 || next_output <= field.time())
+          writer.write_frame(make_frame(field));
+        writer.write_series("tip_streamwise_displacement", times, tip_streamwise);
+        writer.write_series("tip_height", times, tip_height);
+        coupler::MetricsReport report;
+        report_metrics(config, field, times, tip_streamwise, tip_height, report);
+        report.info()["plants"] = field.plant_count();
+        report.info()["nodes"] = node_count;
+        report.info()["node_substeps"] = node_substeps;
+        report.info()["most_substeps_in_a_window"] = most_substeps;
+        report.info()["stable_substep"] = field.stable_substep();
+        report.info()["most_newton_iterations"] = most_newton_iterations;
+        report.info()["kinetic_energy"] = field.kinetic_energy();
+        report.info()["elastic_energy"] = field.elastic_energy();
+        participant.finished(report.dump());
+        return;
+      }
+      if (window.index == 0) {
+        record_tip();
+        writer.write_frame(make_frame(field));
+        next_output = config.output_interval;
+        link.publish_state(field.positions(), field.velocities(), no_drag);
+        participant.done(0);
+        continue;
+      }
+      const auto [begin, end] = link.ambient(window);
+      const auto step = field.advance(window.dt, begin.velocity, end.velocity);
+      node_substeps += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count);
+      most_substeps = std::max(most_substeps, step.substeps);
+      most_newton_iterations = std::max(most_newton_iterations, step.max_newton_iterations);
+      record_tip();
+      if (field.time() >= next_output - 1e-12 * std::max(1.0, next_output)) {
+        writer.write_frame(make_frame(field));
+        next_output += config.output_interval;
+      }
+      link.publish_state(field.positions(), field.velocities(), field.window_mean_drag());
+      participant.done(step.substeps);
+    }
+  });
+}
