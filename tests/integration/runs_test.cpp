@@ -4,11 +4,13 @@
 
 #include <fmt/format.h>
 
+#include <fstream>
 #include <future>
 
 #include "command.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/replay/recording.hpp"
+#include "cosim/scenario/section.hpp"
 
 namespace cosim::testing {
 namespace {

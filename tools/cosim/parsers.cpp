@@ -1,9 +1,10 @@
 // Every participant kind `cosim` can start, with the parser that checks its section before the
 // run begins (the process parses the same section again with the same code).
-#include "config.hpp"
 #include "cosim/prescribed_flow/config.hpp"
 #include "cosim/replay/config.hpp"
+#include "fluid_config.hpp"
 #include "runner.hpp"
+#include "vegetation_config.hpp"
 
 namespace cosim::tool {
 
@@ -13,6 +14,10 @@ const std::map<std::string, scenario::ParticipantParser>& participant_parsers() 
                              const scenario::Scene&) { prescribed_flow::parse_settings(section); }},
       {"replay",
        [](scenario::Section& section, const scenario::Scene&) { replay::parse_settings(section); }},
+      {"fluid_mps",
+       [](scenario::Section& section, const scenario::Scene& scene) {
+         mps::parse_config(section, scene.output_interval);
+       }},
       {"vegetation_beam",
        [](scenario::Section& section, const scenario::Scene& scene) {
          vegetation::parse_config(section, scene.output_interval);

@@ -163,6 +163,9 @@ void print_report(const std::filesystem::path& run_dir) {
                    metric, value["value"].get<double>(), value.value("unit", ""),
                    value["reference"].get<double>(), 100.0 * value["relative_error"].get<double>(),
                    value.value("reference_source", ""));
+      } else if (value.contains("reference_source")) {
+        fmt::print("    {:<28} {:>12.5g} {:<6} against {}\n", metric, value["value"].get<double>(),
+                   value.value("unit", ""), value["reference_source"].get<std::string>());
       } else {
         fmt::print("    {:<28} {:>12.5g} {}\n", metric, value["value"].get<double>(),
                    value.value("unit", ""));

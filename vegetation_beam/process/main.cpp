@@ -5,12 +5,12 @@
 
 #include <algorithm>
 
-#include "config.hpp"
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/coupler/process_main.hpp"
 #include "cosim/output/point_series.hpp"
 #include "elastica.hpp"
+#include "vegetation_config.hpp"
 
 namespace {
 

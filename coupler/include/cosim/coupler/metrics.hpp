@@ -23,6 +23,14 @@ class MetricsReport {
                               {"relative_error", error},
                               {"reference_source", reference_source}};
   }
+  // An error measure that is itself the comparison (e.g. a relative RMS error against measured
+  // points), with the source it is measured against.
+  void error(const std::string& name, double relative_error, const std::string& reference_source) {
+    json_["metrics"][name] = {{"value", relative_error},
+                              {"unit", "relative"},
+                              {"relative_error", relative_error},
+                              {"reference_source", reference_source}};
+  }
   // Anything else worth keeping (stability flags, counts, series names).
   nlohmann::json& info() { return json_["info"]; }
   std::string dump() const { return json_.dump(); }

@@ -51,6 +51,10 @@ class Section {
   std::string text(const std::string& key, const std::string& fallback,
                    const std::vector<std::string>& allowed = {});
   std::string text(const std::string& key, const std::vector<std::string>& allowed = {});
+  // A required text that must be one of `allowed`.
+  std::string choice(const std::string& key, const std::vector<std::string>& allowed) {
+    return text(key, allowed);
+  }
   Eigen::Vector3d vector3(const std::string& key, const Eigen::Vector3d& fallback);
   Eigen::Vector3d vector3(const std::string& key);
   std::vector<double> numbers(const std::string& key, Range range = {});

@@ -1,4 +1,4 @@
-#include "config.hpp"
+#include "vegetation_config.hpp"
 
 #include <fmt/format.h>
 
@@ -71,7 +71,7 @@ VegetationConfig parse_config(scenario::Section& section, double scene_output_in
 
   if (section.has("reference")) {
     auto reference = section.child("reference");
-    reference.text("kind", std::vector<std::string>{"elastica_uniform_flow"});
+    reference.choice("kind", {"elastica_uniform_flow"});
     ElasticaReference elastica;
     elastica.plant = reference.integer("plant", 0, Range::between(0, 1e9));
     if (elastica.plant >= static_cast<int>(config.plants.size())) {

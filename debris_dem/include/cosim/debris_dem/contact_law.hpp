@@ -1,0 +1,60 @@
+// Spring-dashpot contact law of seed 004 section 2.3: a normal spring that resists compression
+// only (fig. 3a) and a tangential spring limited by Mohr-Coulomb (fig. 3b), each with a parallel
+// dashpot; the tangential spring is incremental (eq. 11) and kept per contact pair.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+
+#include "cosim/debris_dem/contact_geometry.hpp"
+
+namespace cosim::dem {
+
+enum class PairKind : std::uint8_t {
+  kSphereSphere,
+  kSphereCylinder,
+  kCylinderCylinder,
+  kSphereTriangle,
+  kCylinderTriangle,
+};
+
+struct ContactPair {
+  int a = -1;  // sphere before cylinder before triangle; a < b for equal kinds
+  int b = -1;
+  PairKind kind = PairKind::kSphereSphere;
+  double normal_stiffness = 0.0;
+  double tangential_stiffness = 0.0;
+  double normal_damping = 0.0;
+  double tangential_damping = 0.0;
+  double friction = 0.0;
+  Eigen::Vector3d tangential_spring = Eigen::Vector3d::Zero();  // shear displacement, world
+  bool touching = false;
+  // Results of the last evaluation.
+  Eigen::Vector3d force_on_a = Eigen::Vector3d::Zero();
+  Eigen::Vector3d lever_a = Eigen::Vector3d::Zero();  // contact point minus A's center
+  Eigen::Vector3d lever_b = Eigen::Vector3d::Zero();  // contact point minus B's center
+  double overlap = 0.0;
+  double overlap_ratio = 0.0;  // overlap / smaller radius of the pair
+};
+
+// Spring and dashpot constants of a pair from the two materials' values and masses:
+// c = 2 zeta sqrt(m_eff k) for both directions (seed 004 gives c_n, c_s per particle size).
+struct PairConstants {
+  double normal_stiffness;
+  double tangential_stiffness;
+  double normal_damping;
+  double tangential_damping;
+  double friction;
+};
+PairConstants pair_constants(double kn_a, double kn_b, double kt_a, double kt_b, double zeta_a,
+                             double zeta_b, double mu_a, double mu_b, double mass_a, double mass_b);
+
+// Evaluates the force on A for a touching geometry and relative velocity v_A - v_B at the
+// contact point; updates the tangential spring. clip: total normal force >= 0.
+void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
+                       const Eigen::Vector3d& relative_velocity, double dt, bool clip);
+
+// Energy held by the pair's springs (normal 0.5 k delta^2, tangential 0.5 k_s |xi|^2).
+double contact_elastic_energy(const ContactPair& pair);
+
+}  // namespace cosim::dem

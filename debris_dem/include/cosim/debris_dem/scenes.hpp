@@ -1,0 +1,78 @@
+// Scene builders for the flume and check-dam experiment of seed 004 (section 3, 4.1): the flume
+// frame has x downstream along the bed, y across, z normal to the bed (bed at z = 0), and the
+// slope enters through a tilted gravity vector.
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "cosim/debris_dem/dem_world.hpp"
+
+namespace cosim::dem {
+
+// Gravity in the flume frame for a bed slope of slope_degrees (15 degrees in seed 004).
+Eigen::Vector3d slope_gravity(double slope_degrees, double g = 9.81);
+
+struct FlumeSpec {
+  double x_start = 0.0;
+  double length = 1.5;
+  double width = 0.3;  // walls at y = 0 and y = width
+  double wall_height = 0.15;
+  bool upstream_wall = true;  // closes x = x_start
+};
+// Bed and side walls as triangles (two per rectangle); returns their element ids.
+std::vector<int> add_flume(DemWorld& world, const FlumeSpec& spec, const Material& material);
+
+// Fixed roughness spheres on the bed, embedded by their radius (seed 004 fig. 12: 7-20 mm
+// spheres), on a jittered grid of spacing ~ d_max over [x0, x1] x [0, width].
+std::vector<int> add_bed_roughness(DemWorld& world, double x0, double x1, double width,
+                                   double d_min, double d_max, unsigned seed,
+                                   const Material& material);
+
+struct GridDamSpec {
+  double x = 1.0;                  // streamwise position of the column axes
+  double width = 0.3;              // flume width
+  double column_diameter = 0.018;  // seed 004 fig. 11: 18 mm wooden columns
+  double horizontal_gap = 0.05;    // clear gap between vertical columns (l_H)
+  double vertical_gap = 0.0;       // clear gap between horizontal beams (l_V); 0: no beams
+  double height = 0.15;
+};
+// Vertical columns (and horizontal beams if vertical_gap > 0) as fixed cylinders, placed
+// symmetrically across the flume with the given clear gaps (walls count as columns).
+std::vector<int> add_grid_dam(DemWorld& world, const GridDamSpec& spec, const Material& material);
+
+struct PackingSpec {
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero();
+  Eigen::Vector3d box_max = Eigen::Vector3d::Ones();
+  std::vector<double> sphere_diameters;  // one entry per sphere
+  int log_count = 0;
+  double log_diameter = 0.01;  // seed 004: 10 x 100 mm logs
+  double log_length = 0.1;
+  unsigned seed = 1;
+  int attempts_per_element = 2000;
+};
+struct Packing {
+  std::vector<int> spheres;
+  std::vector<int> logs;
+  [[nodiscard]] std::vector<int> all() const;
+};
+// Rejection placement (seed 004 section 4.1(2)): random non-overlapping positions in the box,
+// logs first with random horizontal axes. Throws std::runtime_error if an element cannot be
+// placed.
+Packing random_packing(DemWorld& world, const PackingSpec& spec, const Material& sphere_material,
+                       const Material& log_material);
+
+// Lets the packing fall under gravity for duration seconds (the drop method of seed 004;
+// no fluid). Returns the largest speed at the end.
+double settle(DemWorld& world, double duration);
+
+// Seed 004 eq. (55): volume fraction of the debris elements still upstream of x_dam.
+double capture_rate(const DemWorld& world, const std::vector<int>& debris, double x_dam);
+
+// Prescribed flow for the flume frame after seed 004 eq. (50): velocity U at the surface, 0.8 U
+// on the bed, water fraction 1 below depth h and 0 above; one entry per moving element.
+void prescribed_flume_flow(const DemWorld& world, const Eigen::Vector3d& surface_velocity,
+                           double depth, std::vector<Eigen::Vector3d>& velocity,
+                           std::vector<double>& water_fraction);
+
+}  // namespace cosim::dem

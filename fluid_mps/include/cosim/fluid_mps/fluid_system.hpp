@@ -1,0 +1,106 @@
+// Semi-implicit MPS fluid (Koshizuka-Oka; seed 000 section 2(1), seed 001 section 2).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "cosim/fluid_mps/kernels.hpp"
+#include "cosim/fluid_mps/parameters.hpp"
+
+namespace cosim::mps {
+
+struct StepReport {
+  double dt = 0.0;
+  int pcg_iterations = 0;
+  double pcg_residual = 0.0;
+  bool pcg_converged = true;
+  double max_speed = 0.0;     // fluid particles, end of step
+  int surface_particles = 0;  // fluid and wall particles with the Dirichlet p = 0 condition
+  int collisions = 0;         // approaching pairs closer than d_c corrected this step
+  int pressure_unknowns = 0;
+};
+
+// Result of apply_point_forces: forces of points with no fluid inside the radius are dropped.
+struct ForceDelivery {
+  int undelivered_points = 0;
+  Eigen::Vector3d undelivered_force = Eigen::Vector3d::Zero();
+};
+
+// Snapshot for restart (see restart.hpp for the binary file).
+struct MpsState {
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<Eigen::Vector3d> velocities;
+  std::vector<double> pressures;
+  std::vector<ParticleKind> kinds;
+  double time = 0.0;
+  long step = 0;
+};
+
+class FluidSystem {
+ public:
+  FluidSystem(MpsParameters parameters, ParticleSet particles);
+  // Restart: the state of save_state(); continuing gives the same bits as a straight run.
+  FluidSystem(MpsParameters parameters, const MpsState& state);
+
+  int particle_count() const { return static_cast<int>(positions_.size()); }
+  const std::vector<Eigen::Vector3d>& positions() const { return positions_; }
+  const std::vector<Eigen::Vector3d>& velocities() const { return velocities_; }
+  const std::vector<double>& pressures() const { return pressures_; }
+  const std::vector<ParticleKind>& kinds() const { return kinds_; }
+  // Number densities at the temporary positions r* of the last step (initial positions before).
+  const std::vector<double>& number_densities() const { return number_densities_; }
+  const MpsParameters& parameters() const { return parameters_; }
+  double time() const { return time_; }
+  long step_count() const { return step_; }
+  double particle_mass() const { return particle_mass_; }
+  double n0_density() const { return density_sums_.n0; }
+  double n0_gradient() const { return gradient_sums_.n0; }
+  double n0_laplacian() const { return laplacian_sums_.n0; }
+  double lambda_laplacian() const;  // [m^2]
+
+  // dt = min(courant l0 / u_max, diffusion_number l0^2 / nu, max_dt).
+  double stable_dt() const;
+
+  // One semi-implicit step: explicit viscosity + gravity + external forces, collision model,
+  // pressure Poisson equation with free-surface Dirichlet condition, pressure correction.
+  // Throws StabilityError on NaN, escaped particle or runaway speed.
+  StepReport step(double dt);
+
+  // Ensemble average of fluid particle velocities within `radius` of each point (seed 000: the
+  // surrounding velocity of a plant particle, r_ev = 2 d_veg). water_fraction: fluid particles
+  // within radius / particles of a full lattice within radius, clipped to [0, 1]. Points with no
+  // fluid get zero velocity and fraction 0.
+  std::vector<Eigen::Vector3d> sample_velocity(const std::vector<Eigen::Vector3d>& points,
+                                               double radius,
+                                               std::vector<double>* water_fraction = nullptr) const;
+
+  // Forces [N in 3D, N/m in 2D] applied during the next step only, each shared equally by the
+  // fluid particles within `radius` (the adjoint of sample_velocity), so the momentum given is
+  // exactly sum(force) * dt. Forces of points with no fluid nearby are reported, not applied.
+  ForceDelivery apply_point_forces(const std::vector<Eigen::Vector3d>& points,
+                                   const std::vector<Eigen::Vector3d>& forces, double radius);
+
+  // Sum of m u over fluid particles [kg m/s in 3D, kg m/s per m in 2D].
+  Eigen::Vector3d total_fluid_momentum() const;
+
+  MpsState save_state() const;
+
+ private:
+  void initialise();
+  void check_stability(long step) const;
+
+  MpsParameters parameters_;
+  std::vector<Eigen::Vector3d> positions_;
+  std::vector<Eigen::Vector3d> velocities_;
+  std::vector<double> pressures_;
+  std::vector<ParticleKind> kinds_;
+  std::vector<double> number_densities_;
+  std::vector<Eigen::Vector3d> external_accelerations_;
+  double time_ = 0.0;
+  long step_ = 0;
+  double particle_mass_ = 0.0;
+  LatticeSums density_sums_, gradient_sums_, laplacian_sums_;
+  Eigen::AlignedBox3d domain_box_;  // escape box: domain, z extent of 2D runs made non-empty
+};
+
+}  // namespace cosim::mps

@@ -1,0 +1,64 @@
+// Cell-linked neighbour search, O(N): particles are counting-sorted into cubic cells of the
+// search radius, so each particle only tests the 3^D surrounding cells.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+namespace cosim::mps {
+
+// Compressed neighbour lists: the neighbours of i are index[offset[i] .. offset[i+1]) with their
+// distances, in a fixed order (cell by cell, then by particle index), so every loop over them is
+// deterministic whatever the number of OpenMP threads.
+struct NeighbourList {
+  std::vector<std::int64_t> offset;
+  std::vector<int> index;
+  std::vector<double> distance;
+  double radius = 0.0;
+
+  int begin(int i) const { return static_cast<int>(offset[i]); }
+  int end(int i) const { return static_cast<int>(offset[i + 1]); }
+  std::size_t pair_count() const { return index.size(); }
+};
+
+// Box around the positions grown by `margin`; in 2D the z extent is [-margin, margin]. Grids are
+// built on this box rather than the whole domain so memory follows the particles.
+Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, int dimension,
+                                 double margin);
+
+class NeighbourGrid {
+ public:
+  // `box` must contain every position (the caller checks escapes first); 2D uses one z layer.
+  NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, double cell_size);
+
+  // Sorts the particles into cells.
+  void build(const std::vector<Eigen::Vector3d>& positions);
+
+  // All pairs j != i with |r_j - r_i| < radius (radius <= cell size). Parallel and deterministic.
+  NeighbourList neighbours(const std::vector<Eigen::Vector3d>& positions, double radius) const;
+
+  // Particles within `radius` of an arbitrary point (radius may exceed the cell size).
+  void query(const std::vector<Eigen::Vector3d>& positions, const Eigen::Vector3d& point,
+             double radius, std::vector<int>& found) const;
+
+  double cell_size() const { return cell_size_; }
+
+ private:
+  Eigen::Array3i cell_of(const Eigen::Vector3d& position) const;
+  std::int64_t linear(const Eigen::Array3i& cell) const {
+    return (static_cast<std::int64_t>(cell.z()) * cells_.y() + cell.y()) * cells_.x() + cell.x();
+  }
+  template <class Visit>
+  void visit_cells(const Eigen::Array3i& low, const Eigen::Array3i& high, Visit&& visit) const;
+
+  int dimension_;
+  Eigen::Vector3d origin_;
+  double cell_size_;
+  Eigen::Array3i cells_;
+  std::vector<std::int64_t> cell_start_;  // size cell count + 1
+  std::vector<int> sorted_;               // particle indices ordered by cell, then index
+};
+
+}  // namespace cosim::mps

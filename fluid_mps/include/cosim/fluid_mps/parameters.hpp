@@ -1,0 +1,88 @@
+// Parameters, particle kinds and errors of the 2D/3D MPS fluid solver.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cosim::mps {
+
+// Physical and numerical parameters. Equation numbers refer to seed 001 (Maeno et al.) unless
+// marked "seed 000" (Ikari & Gotoh).
+struct MpsParameters {
+  int dimension = 2;               // D0 of seed 001 eqs. (3), (4), (8), (9)
+  double particle_spacing = 0.01;  // l0 [m]
+  double density = 1000.0;         // rho [kg/m^3]
+  double kinematic_viscosity = 1e-6;
+  Eigen::Vector3d gravity{0.0, -9.81, 0.0};
+  // Influence radii r_e = l_r l0 per operator (seed 001 eq. (6)). Seed 001 quotes 2.1 / 2.1 / 4.0
+  // as the usual recommendation and found a gradient radius of 8.0 l0 best for its fishway.
+  double radius_density_over_l0 = 2.1;
+  double radius_gradient_over_l0 = 2.1;
+  double radius_laplacian_over_l0 = 4.0;
+  double surface_threshold = 0.97;  // beta: free surface where n* < beta n0
+  // Collision model, seed 001 eqs. (10)-(11): d_c = d_cr l0, V_c = V_r (1 + C_c).
+  // Seed 001 settles on d_cr = 1.0, C_c = -0.8 for the fishway; 0.5 / 0.2 is its milder run PF-1.
+  double collision_distance_ratio = 0.5;
+  double collision_restitution = 0.2;
+  double courant = 0.2;
+  double diffusion_number = 0.2;  // viscous limit dt <= diffusion_number l0^2 / nu
+  double max_dt = 1e-3;           // user upper bound [s]
+  double pcg_tolerance = 1e-8;    // relative residual |b - A p| / |b|
+  int pcg_max_iterations = 2000;
+  // Ikeda-type artificial compressibility [1/Pa]: keeps the Poisson matrix strictly positive
+  // definite when a cluster of particles has no free-surface neighbour.
+  double compressibility = 0.45e-9;
+  // Source term of the pressure Poisson equation.
+  //  density: -gamma rho/dt^2 (n* - n0)/n0 (seed 001 / Koshizuka-Oka; gamma = 1 is the original
+  //           scheme, the Koshizuka textbook code uses 0.2);
+  //  mixed:   rho/dt div(u*) - gamma rho/dt^2 (n^k - n0)/n0 (Tanaka & Masunaga 2010), which
+  //           removes the velocity divergence fully and the density error gently (gamma ~ 0.01
+  //           to 0.05): much quieter pressure in still water.
+  enum class SourceTerm { density, mixed };
+  SourceTerm source_term = SourceTerm::density;
+  double pressure_relaxation = 0.2;  // gamma
+  double runaway_speed = 50.0;       // [m/s]; faster particles stop the run with a StabilityError
+  // Particles outside are 'escaped'. Empty box: the bounding box of the initial particles grown
+  // by 20 l0 on each side.
+  Eigen::AlignedBox3d domain;
+};
+
+enum class ParticleKind { fluid, wall, dummy };
+
+// Initial particles of a scene. Wall and dummy particles move with their (prescribed) velocity.
+struct ParticleSet {
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<ParticleKind> kinds;
+  std::vector<Eigen::Vector3d> velocities;
+  std::size_t size() const { return positions.size(); }
+  void add(const Eigen::Vector3d& position, ParticleKind kind,
+           const Eigen::Vector3d& velocity = Eigen::Vector3d::Zero()) {
+    positions.push_back(position);
+    kinds.push_back(kind);
+    velocities.push_back(velocity);
+  }
+};
+
+// NaN, escaped particle or runaway velocity. The message names the step, particle and quantity.
+class StabilityError : public std::runtime_error {
+ public:
+  StabilityError(long step, long particle, const std::string& quantity, const std::string& detail)
+      : std::runtime_error("fluid_mps unstable at step " + std::to_string(step) + ", particle " +
+                           std::to_string(particle) + ", " + quantity + ": " + detail),
+        step_(step),
+        particle_(particle),
+        quantity_(quantity) {}
+  long step() const { return step_; }
+  long particle() const { return particle_; }
+  const std::string& quantity() const { return quantity_; }
+
+ private:
+  long step_;
+  long particle_;
+  std::string quantity_;
+};
+
+}  // namespace cosim::mps

@@ -1,0 +1,98 @@
+#include "fluid_config.hpp"
+
+namespace cosim::mps {
+
+using scenario::Range;
+
+namespace {
+
+MpsParameters parse_parameters(scenario::Section& section) {
+  MpsParameters p;
+  p.dimension = section.integer("dimension", p.dimension, Range::between(2, 3));
+  p.particle_spacing = section.number("particle_spacing", Range::positive());
+  p.density = section.number("density", p.density, Range::positive());
+  p.kinematic_viscosity =
+      section.number("kinematic_viscosity", p.kinematic_viscosity, Range::non_negative());
+  p.gravity = section.vector3("gravity", p.gravity);
+  p.radius_density_over_l0 =
+      section.number("radius_density_over_l0", p.radius_density_over_l0, Range::between(1.0, 10.0));
+  p.radius_gradient_over_l0 = section.number("radius_gradient_over_l0", p.radius_gradient_over_l0,
+                                             Range::between(1.0, 10.0));
+  p.radius_laplacian_over_l0 = section.number(
+      "radius_laplacian_over_l0", p.radius_laplacian_over_l0, Range::between(1.0, 10.0));
+  p.surface_threshold =
+      section.number("surface_threshold", p.surface_threshold, Range::between(0.5, 1.0));
+  p.collision_distance_ratio = section.number("collision_distance_ratio",
+                                              p.collision_distance_ratio, Range::between(0.0, 1.5));
+  p.collision_restitution =
+      section.number("collision_restitution", p.collision_restitution, Range::between(-1.0, 1.0));
+  p.courant = section.number("courant", p.courant, Range{0.0, 1.0, true});
+  p.diffusion_number =
+      section.number("diffusion_number", p.diffusion_number, Range{0.0, 0.5, true});
+  p.max_dt = section.number("max_dt", p.max_dt, Range::positive());
+  p.pcg_tolerance = section.number("pcg_tolerance", p.pcg_tolerance, Range{0.0, 1e-2, true});
+  p.pcg_max_iterations =
+      section.integer("pcg_max_iterations", p.pcg_max_iterations, Range::between(1, 1e7));
+  p.compressibility = section.number("compressibility", p.compressibility, Range::non_negative());
+  const std::string source = section.text("source_term", "mixed", {"mixed", "density"});
+  p.source_term =
+      source == "mixed" ? MpsParameters::SourceTerm::mixed : MpsParameters::SourceTerm::density;
+  p.pressure_relaxation =
+      section.number("pressure_relaxation", p.pressure_relaxation, Range::between(0.0, 1.0));
+  p.runaway_speed = section.number("runaway_speed", p.runaway_speed, Range::positive());
+  return p;
+}
+
+SceneSettings parse_scene(scenario::Section scene) {
+  SceneSettings s;
+  s.kind = scene.choice("kind", {"dam_break", "still_water_tank"});
+  if (s.kind == "dam_break") {
+    s.column_width = scene.number("column_width", Range::positive());
+    s.column_height = scene.number("column_height", Range::positive());
+    s.tank_length = scene.number("tank_length", Range::positive());
+    if (s.tank_length < s.column_width) scene.fail("tank_length", "shorter than the water column");
+  } else {
+    s.width = scene.number("width", Range::positive());
+    s.depth = scene.number("depth", Range::positive());
+  }
+  s.tank_height = scene.number("tank_height", Range::positive());
+  s.wall_layers = scene.integer("wall_layers", s.wall_layers, Range::between(1, 10));
+  s.dummy_layers = scene.integer("dummy_layers", s.dummy_layers, Range::between(0, 10));
+  return s;
+}
+
+}  // namespace
+
+FluidConfig parse_config(scenario::Section& section, double scene_output_interval) {
+  FluidConfig config;
+  config.parameters = parse_parameters(section);
+  if (section.has("restart")) {
+    auto restart = section.child("restart");
+    config.restart = RestartSettings{restart.existing_file("file"), restart.integer("frame", -1)};
+  }
+  // The initial scene is still described on restart: it documents the run and sets the tank.
+  config.scene = parse_scene(section.child("scene"));
+  const double spacing = config.parameters.particle_spacing;
+  config.sample_radius = section.number("sample_radius", 2.0 * spacing, Range::positive());
+  config.spanwise_spacing = section.number("spanwise_spacing", 1.0, Range::positive());
+  config.output_interval =
+      section.number("output_interval", scene_output_interval, Range::positive());
+  if (section.has("reference")) {
+    auto reference = section.child("reference");
+    ReferenceSettings r;
+    r.kind = reference.choice("kind", {"martin_moyce", "hydrostatic"});
+    if (r.kind == "martin_moyce") {
+      r.file = reference.existing_file("file");
+      r.column_width = reference.number("column_width", Range::positive());
+    } else {
+      r.still_depth = reference.number("still_depth", Range::positive());
+      r.probe_x = reference.number("probe_x");
+      r.probe_depths = reference.numbers("probe_depths", Range::positive());
+      r.average_from = reference.number("average_from", 0.0, Range::non_negative());
+    }
+    config.reference = r;
+  }
+  return config;
+}
+
+}  // namespace cosim::mps

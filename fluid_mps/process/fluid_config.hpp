@@ -1,0 +1,50 @@
+// The `fluid_mps` section of a scenario: MPS parameters, the initial scene (or a restart from an
+// output frame), coupling to solids, outputs and the reference the run is checked against.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/scenario/section.hpp"
+
+namespace cosim::mps {
+
+struct SceneSettings {
+  std::string kind;                            // dam_break | still_water_tank
+  double column_width = 0, column_height = 0;  // dam_break
+  double width = 0, depth = 0;                 // still_water_tank
+  double tank_length = 0, tank_height = 0;
+  int wall_layers = 2, dummy_layers = 2;
+};
+
+struct RestartSettings {
+  std::filesystem::path file;  // an output file (particles.h5) of an earlier run
+  int frame = -1;              // negative: from the end
+};
+
+struct ReferenceSettings {
+  std::string kind;  // martin_moyce | hydrostatic
+  std::filesystem::path file;
+  double column_width = 0;           // martin_moyce: a
+  std::vector<double> probe_depths;  // hydrostatic: below the still surface, at mid tank
+  double still_depth = 0;
+  double probe_x = 0;
+  double average_from = 0;  // hydrostatic: time averaging starts here
+};
+
+struct FluidConfig {
+  MpsParameters parameters;
+  SceneSettings scene;
+  std::optional<RestartSettings> restart;
+  double sample_radius = 0;     // ensemble-average radius around solid nodes (seed 000 r_ev)
+  double spanwise_spacing = 1;  // 2D: solids' forces are spread over this depth [m]
+  double output_interval = 0;
+  std::optional<ReferenceSettings> reference;
+};
+
+FluidConfig parse_config(scenario::Section& section, double scene_output_interval);
+
+}  // namespace cosim::mps

@@ -1,0 +1,147 @@
+// The fluid_mps process: one MPS step per coupling window (more if the window exceeds the
+// stable step). Each window it takes minus the solids' drag, advances, samples the flow at the
+// solids' nodes, writes particle frames for ParaView, and reports errors against its reference.
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+
+#include "cosim/coupler/links.hpp"
+#include "cosim/coupler/process_main.hpp"
+#include "cosim/fluid_mps/scenes.hpp"
+#include "cosim/output/point_series.hpp"
+#include "fluid_config.hpp"
+#include "references.hpp"
+
+namespace {
+
+using namespace cosim;
+
+mps::ParticleSet build_scene(mps::MpsParameters& parameters, const mps::SceneSettings& scene) {
+  if (scene.kind == "dam_break") {
+    return mps::dam_break(parameters, scene.column_width, scene.column_height, scene.tank_length,
+                          scene.tank_height, scene.wall_layers, scene.dummy_layers);
+  }
+  return mps::still_water_tank(parameters, scene.width, scene.depth, scene.tank_height,
+                               scene.wall_layers, scene.dummy_layers);
+}
+
+// An output frame holds everything a restart needs: positions, velocities, pressures, kinds.
+output::PointFrame make_frame(const mps::FluidSystem& system) {
+  output::PointFrame frame;
+  frame.time = system.time();
+  frame.positions = system.positions();
+  frame.vectors["velocity"] = system.velocities();
+  frame.scalars["pressure"] = system.pressures();
+  frame.scalars["number_density"] = system.number_densities();
+  auto& kinds = frame.labels["kind"];
+  for (const auto kind : system.kinds()) kinds.push_back(static_cast<int>(kind));
+  return frame;
+}
+
+mps::MpsState state_from_frame(const mps::RestartSettings& restart) {
+  const auto frame = output::read_point_frame(restart.file, restart.frame);
+  mps::MpsState state;
+  state.time = frame.time;
+  state.positions = frame.positions;
+  auto require = [&](const auto& map, const char* name) -> const auto& {
+    const auto found = map.find(name);
+    if (found == map.end()) {
+      throw std::runtime_error(fmt::format("{}: frame {} has no '{}' to restart from",
+                                           restart.file.string(), restart.frame, name));
+    }
+    return found->second;
+  };
+  state.velocities = require(frame.vectors, "velocity");
+  state.pressures = require(frame.scalars, "pressure");
+  for (const int kind : require(frame.labels, "kind")) {
+    state.kinds.push_back(static_cast<mps::ParticleKind>(kind));
+  }
+  return state;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return coupler::run_process(argc, argv, "fluid_mps", [](coupler::ProcessContext& context) {
+    auto section = context.section();
+    mps::FluidConfig config = mps::parse_config(section, context.scene.output_interval);
+    mps::ParticleSet particles = build_scene(config.parameters, config.scene);
+    std::unique_ptr<mps::FluidSystem> system;
+    if (config.restart) {
+      system =
+          std::make_unique<mps::FluidSystem>(config.parameters, state_from_frame(*config.restart));
+      spdlog::info("restarted from {} frame {} at t = {:.6g} s", config.restart->file.string(),
+                   config.restart->frame, system->time());
+    } else {
+      system = std::make_unique<mps::FluidSystem>(config.parameters, std::move(particles));
+    }
+    spdlog::info("{} particles, l0 = {} m, stable dt {:.3g} s", system->particle_count(),
+                 config.parameters.particle_spacing, system->stable_dt());
+
+    auto& participant = *context.participant;
+    coupler::FlowLink link(participant, context.scene);
+    output::PointSeriesWriter writer(context.output_dir() / "particles", "fluid_mps");
+    std::optional<mps::ReferenceTracker> reference;
+    if (config.reference) reference.emplace(*config.reference, -config.parameters.gravity.y());
+    const double force_scale =
+        config.parameters.dimension == 2 ? 1.0 / config.spanwise_spacing : 1.0;
+
+    double next_output = system->time();
+    int64_t steps = 0, pcg_iterations = 0;
+    int most_pcg_iterations = 0;
+    Eigen::Vector3d undelivered = Eigen::Vector3d::Zero();
+    std::vector<double> water;
+    while (true) {
+      const coupler::Window window = participant.next_window();
+      context.maybe_inject_fault(window.index);
+      if (window.finish) {
+        if (system->time() > next_output - config.output_interval * 0.5)
+          writer.write_frame(make_frame(*system));
+        coupler::MetricsReport report;
+        if (reference) reference->report(report);
+        report.info()["particles"] = system->particle_count();
+        report.info()["steps"] = steps;
+        report.info()["mean_pcg_iterations"] = steps > 0 ? double(pcg_iterations) / steps : 0.0;
+        report.info()["most_pcg_iterations"] = most_pcg_iterations;
+        report.info()["undelivered_solid_force_impulse"] = {undelivered.x(), undelivered.y(),
+                                                            undelivered.z()};
+        participant.finished(report.dump());
+        return;
+      }
+      auto solids = link.receive_solids(window);
+      int window_steps = 0;
+      if (window.dt > 0.0) {
+        // The solids' drag acts on the fluid with the opposite sign (momentum conservation).
+        for (const auto& solid : solids) {
+          std::vector<Eigen::Vector3d> reaction(solid.drag.size());
+          for (std::size_t i = 0; i < reaction.size(); ++i)
+            reaction[i] = -force_scale * solid.drag[i];
+          const auto delivery =
+              system->apply_point_forces(solid.positions, reaction, config.sample_radius);
+          undelivered += delivery.undelivered_force * window.dt;
+        }
+        // The window is the fluid step; a window beyond the stable step is split.
+        const int pieces =
+            std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));
+        for (int piece = 0; piece < pieces; ++piece) {
+          const auto step = system->step(window.dt / pieces);
+          pcg_iterations += step.pcg_iterations;
+          most_pcg_iterations = std::max(most_pcg_iterations, step.pcg_iterations);
+          ++window_steps;
+        }
+        steps += window_steps;
+      }
+      if (reference) reference->observe(*system);
+      for (const auto& solid : solids) {
+        const auto velocity =
+            system->sample_velocity(solid.positions, config.sample_radius, &water);
+        link.publish_samples(solid.name, velocity, water);
+      }
+      if (system->time() >= next_output - 1e-9 * config.output_interval) {
+        writer.write_frame(make_frame(*system));
+        next_output += config.output_interval;
+      }
+      participant.done(window_steps, system->stable_dt());
+    }
+  });
+}

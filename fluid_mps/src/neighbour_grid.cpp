@@ -1,0 +1,138 @@
+#include "cosim/fluid_mps/neighbour_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace cosim::mps {
+
+Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, int dimension,
+                                 double margin) {
+  Eigen::AlignedBox3d box(Eigen::Vector3d::Zero());
+  if (!positions.empty()) box = Eigen::AlignedBox3d(positions.front());
+  for (const auto& x : positions) box.extend(x);
+  box.min().array() -= margin;
+  box.max().array() += margin;
+  if (dimension == 2) {
+    box.min().z() = -margin;
+    box.max().z() = margin;
+  }
+  return box;
+}
+
+NeighbourGrid::NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, double cell_size)
+    : dimension_(dimension), origin_(box.min()), cell_size_(cell_size) {
+  if (!(cell_size > 0.0) || box.isEmpty()) {
+    throw std::invalid_argument("NeighbourGrid: empty box or non-positive cell size");
+  }
+  const Eigen::Vector3d extent = box.sizes();
+  for (int axis = 0; axis < 3; ++axis) {
+    const bool flat = axis >= dimension;
+    cells_[axis] = flat ? 1 : std::max(1, static_cast<int>(std::ceil(extent[axis] / cell_size)));
+  }
+  const double cell_count = static_cast<double>(cells_.x()) * cells_.y() * cells_.z();
+  if (cell_count > 2e8) {
+    throw std::invalid_argument("NeighbourGrid: domain box too large for the cell size");
+  }
+}
+
+Eigen::Array3i NeighbourGrid::cell_of(const Eigen::Vector3d& position) const {
+  Eigen::Array3i cell(0, 0, 0);
+  for (int axis = 0; axis < dimension_; ++axis) {
+    const int c = static_cast<int>(std::floor((position[axis] - origin_[axis]) / cell_size_));
+    cell[axis] = std::clamp(c, 0, cells_[axis] - 1);
+  }
+  return cell;
+}
+
+void NeighbourGrid::build(const std::vector<Eigen::Vector3d>& positions) {
+  const std::size_t cell_count = static_cast<std::size_t>(cells_.x()) * cells_.y() * cells_.z();
+  const int n = static_cast<int>(positions.size());
+  std::vector<std::int64_t> cell_index(n);
+#pragma omp parallel for schedule(static) if (n >= 1024)
+  for (int i = 0; i < n; ++i) cell_index[i] = linear(cell_of(positions[i]));
+  // Counting sort: stable, so particles of one cell stay in index order.
+  cell_start_.assign(cell_count + 1, 0);
+  for (int i = 0; i < n; ++i) ++cell_start_[cell_index[i] + 1];
+  for (std::size_t c = 0; c < cell_count; ++c) cell_start_[c + 1] += cell_start_[c];
+  std::vector<std::int64_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  sorted_.resize(n);
+  for (int i = 0; i < n; ++i) sorted_[fill[cell_index[i]]++] = i;
+}
+
+template <class Visit>
+void NeighbourGrid::visit_cells(const Eigen::Array3i& low, const Eigen::Array3i& high,
+                                Visit&& visit) const {
+  for (int z = low.z(); z <= high.z(); ++z)
+    for (int y = low.y(); y <= high.y(); ++y)
+      for (int x = low.x(); x <= high.x(); ++x) {
+        const std::int64_t c = linear(Eigen::Array3i(x, y, z));
+        for (std::int64_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) visit(sorted_[k]);
+      }
+}
+
+NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& positions,
+                                        double radius) const {
+  if (radius > cell_size_ * (1.0 + 1e-12)) {
+    throw std::invalid_argument("NeighbourGrid::neighbours: radius exceeds the cell size");
+  }
+  const int n = static_cast<int>(positions.size());
+  const double radius2 = radius * radius;
+  NeighbourList list;
+  list.radius = radius;
+  list.offset.assign(n + 1, 0);
+  auto range = [&](int i, Eigen::Array3i& low, Eigen::Array3i& high) {
+    const Eigen::Array3i cell = cell_of(positions[i]);
+    low = (cell - 1).max(0);
+    high = (cell + 1).min(cells_ - 1);
+  };
+  // Pass 1 counts, pass 2 fills: both per particle, hence thread-count independent.
+#pragma omp parallel for schedule(dynamic, 256) if (n >= 1024)
+  for (int i = 0; i < n; ++i) {
+    Eigen::Array3i low, high;
+    range(i, low, high);
+    std::int64_t count = 0;
+    visit_cells(low, high, [&](int j) {
+      if (j != i && (positions[j] - positions[i]).squaredNorm() < radius2) ++count;
+    });
+    list.offset[i + 1] = count;
+  }
+  for (int i = 0; i < n; ++i) list.offset[i + 1] += list.offset[i];
+  list.index.resize(list.offset[n]);
+  list.distance.resize(list.offset[n]);
+#pragma omp parallel for schedule(dynamic, 256) if (n >= 1024)
+  for (int i = 0; i < n; ++i) {
+    Eigen::Array3i low, high;
+    range(i, low, high);
+    std::int64_t k = list.offset[i];
+    visit_cells(low, high, [&](int j) {
+      if (j == i) return;
+      const double d2 = (positions[j] - positions[i]).squaredNorm();
+      if (d2 < radius2) {
+        list.index[k] = j;
+        list.distance[k] = std::sqrt(d2);
+        ++k;
+      }
+    });
+  }
+  return list;
+}
+
+void NeighbourGrid::query(const std::vector<Eigen::Vector3d>& positions,
+                          const Eigen::Vector3d& point, double radius,
+                          std::vector<int>& found) const {
+  found.clear();
+  const int reach = static_cast<int>(std::ceil(radius / cell_size_));
+  const Eigen::Array3i cell = cell_of(point);
+  Eigen::Array3i low = cell, high = cell;
+  for (int axis = 0; axis < dimension_; ++axis) {
+    low[axis] = std::max(0, cell[axis] - reach);
+    high[axis] = std::min(cells_[axis] - 1, cell[axis] + reach);
+  }
+  const double radius2 = radius * radius;
+  visit_cells(low, high, [&](int j) {
+    if ((positions[j] - point).squaredNorm() < radius2) found.push_back(j);
+  });
+}
+
+}  // namespace cosim::mps

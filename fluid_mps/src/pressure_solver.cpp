@@ -1,0 +1,99 @@
+#include "cosim/fluid_mps/pressure_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cosim::mps {
+namespace {
+
+constexpr int kBlock = 1024;
+
+// Deterministic parallel dot product: per-block partial sums, then a serial sum of the blocks.
+double dot(const std::vector<double>& a, const std::vector<double>& b) {
+  const int n = static_cast<int>(a.size());
+  const int blocks = (n + kBlock - 1) / kBlock;
+  std::vector<double> partial(blocks, 0.0);
+#pragma omp parallel for schedule(static) if (blocks >= 2)
+  for (int block = 0; block < blocks; ++block) {
+    const int end = std::min(n, (block + 1) * kBlock);
+    double sum = 0.0;
+    for (int i = block * kBlock; i < end; ++i) sum += a[i] * b[i];
+    partial[block] = sum;
+  }
+  double total = 0.0;
+  for (double p : partial) total += p;
+  return total;
+}
+
+void multiply(const SparseRows& m, const std::vector<double>& x, std::vector<double>& y) {
+  const int n = m.rows();
+#pragma omp parallel for schedule(static) if (n >= 1024)
+  for (int i = 0; i < n; ++i) {
+    double sum = 0.0;
+    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) sum += m.value[k] * x[m.column[k]];
+    y[i] = sum;
+  }
+}
+
+}  // namespace
+
+PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
+                    std::vector<double>& x, double tolerance, int max_iterations) {
+  const int n = matrix.rows();
+  PcgResult result;
+  x.resize(n, 0.0);
+  if (n == 0) {
+    result.converged = true;
+    return result;
+  }
+  std::vector<double> inverse_diagonal(n, 1.0);
+#pragma omp parallel for schedule(static) if (n >= 1024)
+  for (int i = 0; i < n; ++i) {
+    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
+      if (matrix.column[k] == i && matrix.value[k] > 0.0)
+        inverse_diagonal[i] = 1.0 / matrix.value[k];
+    }
+  }
+  const double rhs_norm = std::sqrt(dot(rhs, rhs));
+  if (rhs_norm == 0.0) {
+    std::fill(x.begin(), x.end(), 0.0);
+    result.converged = true;
+    return result;
+  }
+  std::vector<double> r(n), z(n), p(n), q(n);
+  multiply(matrix, x, q);
+#pragma omp parallel for schedule(static) if (n >= 1024)
+  for (int i = 0; i < n; ++i) {
+    r[i] = rhs[i] - q[i];
+    z[i] = inverse_diagonal[i] * r[i];
+    p[i] = z[i];
+  }
+  double rz = dot(r, z);
+  double residual = std::sqrt(dot(r, r)) / rhs_norm;
+  int iteration = 0;
+  while (residual > tolerance && iteration < max_iterations) {
+    multiply(matrix, p, q);
+    const double pq = dot(p, q);
+    if (!(pq > 0.0)) break;  // loss of positive definiteness or breakdown
+    const double alpha = rz / pq;
+#pragma omp parallel for schedule(static) if (n >= 1024)
+    for (int i = 0; i < n; ++i) {
+      x[i] += alpha * p[i];
+      r[i] -= alpha * q[i];
+      z[i] = inverse_diagonal[i] * r[i];
+    }
+    const double rz_next = dot(r, z);
+    const double beta = rz_next / rz;
+    rz = rz_next;
+#pragma omp parallel for schedule(static) if (n >= 1024)
+    for (int i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    residual = std::sqrt(dot(r, r)) / rhs_norm;
+    ++iteration;
+  }
+  result.iterations = iteration;
+  result.relative_residual = residual;
+  result.converged = residual <= tolerance;
+  return result;
+}
+
+}  // namespace cosim::mps

@@ -1,0 +1,201 @@
+// Contact dynamics against the closed forms of references/dem_contact.md.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "cosim/debris_dem/dem_world.hpp"
+#include "cosim/debris_dem/scenes.hpp"
+
+namespace cosim::dem {
+namespace {
+
+DemParameters no_gravity(double dt) {
+  DemParameters p;
+  p.gravity.setZero();
+  p.user_dt = dt;
+  return p;
+}
+
+struct HeadOn {
+  double restitution;
+  double contact_time;
+};
+
+// Two equal spheres approach head-on at +-v; returns e = separation / approach speed and the
+// time the pair was touching.
+HeadOn head_on(const Material& m, bool clip) {
+  const double r = 0.01;
+  const double mass = m.density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  const double dt = 0.01 * std::sqrt(mass / m.normal_stiffness);
+  DemParameters p = no_gravity(dt);
+  p.clip_normal_force = clip;
+  DemWorld world(p);
+  const int a = world.add_sphere({-r - 1e-4, 0, 0}, r, m);
+  const int b = world.add_sphere({r + 1e-4, 0, 0}, r, m);
+  world.set_velocity(a, {0.5, 0, 0});
+  world.set_velocity(b, {-0.5, 0, 0});
+  double touching_time = 0.0;
+  for (int k = 0; k < 200000; ++k) {
+    world.step(dt);
+    if (world.contact_count() > 0) touching_time += dt;
+    if (touching_time > 0.0 && world.contact_count() == 0) break;
+  }
+  return {(world.velocity(b).x() - world.velocity(a).x()) / 1.0, touching_time};
+}
+
+TEST(ContactDynamics, HeadOnRestitutionMatchesDampingRatioFormula) {
+  for (const double e : {0.3, 0.527, 0.9}) {
+    Material m;
+    m.restitution = e;
+    m.normal_stiffness = 1e5;
+    // Dashpot allowed to pull: the closed form e = exp(-pi zeta / sqrt(1 - zeta^2)) holds.
+    const HeadOn free = head_on(m, false);
+    EXPECT_NEAR(free.restitution, e, 0.015 * e) << "e = " << e;
+    const double zeta = m.effective_damping_ratio();
+    const double mass = m.density * 4.0 / 3.0 * std::numbers::pi * 1e-6;
+    const double omega_d =
+        std::sqrt(m.normal_stiffness / (0.5 * mass)) * std::sqrt(1 - zeta * zeta);
+    EXPECT_NEAR(free.contact_time, std::numbers::pi / omega_d, 0.02 * std::numbers::pi / omega_d);
+    // Default convention (no tension, seed 004 fig. 3a): the contact ends when the total force
+    // reaches zero, earlier than the closed form, and the rebound is faster.
+    const HeadOn clipped = head_on(m, true);
+    EXPECT_GE(clipped.restitution, e);
+    EXPECT_LE(clipped.contact_time, free.contact_time);
+  }
+  // Damping ratio 0.2 of seed 004 table 3 is e = 0.527 (dem_contact.md).
+  Material seed;
+  seed.damping_ratio = 0.2;
+  EXPECT_NEAR(head_on(seed, false).restitution, 0.527, 0.004);
+}
+
+// Oblique impact of Chung & Ooi (2011) test 4 on a flat triangle: R = 2.5 mm, |v| = 3.9 m/s,
+// mu = 0.092, e = 0.98 (alumina, 4000 kg/m^3), sliding throughout for tan(theta) >= 3.5 mu (1+e).
+TEST(ContactDynamics, ObliqueImpactSlidingMatchesChungOoi) {
+  for (const double theta_degrees : {40.0, 60.0, 80.0}) {
+    Material m;
+    m.density = 4000;
+    m.normal_stiffness = 1e6;
+    m.tangential_stiffness = 0.8e6;
+    m.restitution = 0.98;
+    m.friction = 0.092;
+    const double r = 0.0025;
+    DemParameters p = no_gravity(2e-7);
+    DemWorld world(p);
+    world.add_triangle({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, m);
+    const int s = world.add_sphere({0, 0, r + 1e-6}, r, m);
+    const double theta = theta_degrees * std::numbers::pi / 180;
+    const double vt = 3.9 * std::sin(theta);
+    const double vn = 3.9 * std::cos(theta);
+    world.set_velocity(s, {vt, 0, -vn});
+    bool touched = false;
+    for (int k = 0; k < 100000; ++k) {
+      world.step(p.user_dt);
+      touched = touched || world.contact_count() > 0;
+      if (touched && world.contact_count() == 0) break;
+    }
+    const double e = world.velocity(s).z() / vn;
+    ASSERT_GT(std::tan(theta), 3.5 * m.friction * (1 + e));
+    const double expected_et = 1 - m.friction * (1 + e) / std::tan(theta);
+    EXPECT_NEAR(world.velocity(s).x() / vt, expected_et, 0.01) << theta_degrees;
+    const double expected_spin = 5 * m.friction * (1 + e) * vn / (2 * r);
+    EXPECT_NEAR(world.angular_velocity(s).y(), expected_spin, 0.02 * expected_spin)
+        << theta_degrees;
+    EXPECT_NEAR(world.angular_velocity(s).x(), 0.0, 1e-9);
+  }
+}
+
+TEST(ContactDynamics, OppositeSpinsHeadOnLeaveSpinsUnchanged) {
+  Material m;
+  m.restitution = 0.5;
+  const double r = 0.01;
+  DemWorld world(no_gravity(1e-6));
+  const int a = world.add_sphere({-r - 1e-4, 0, 0}, r, m);
+  const int b = world.add_sphere({r + 1e-4, 0, 0}, r, m);
+  world.set_velocity(a, {0.5, 0, 0});
+  world.set_velocity(b, {-0.5, 0, 0});
+  // Contact points move together: omega_a x (R e_x) = omega_b x (-R e_x) for opposite spins.
+  world.set_angular_velocity(a, {0, 0, 30});
+  world.set_angular_velocity(b, {0, 0, -30});
+  int touched = 0;
+  for (int k = 0; k < 20000; ++k) {
+    world.step(1e-6);
+    touched += world.contact_count();
+  }
+  ASSERT_GT(touched, 0);
+  EXPECT_LT(world.velocity(a).x(), 0.0);  // rebounded
+  EXPECT_NEAR(world.angular_velocity(a).z(), 30, 1e-9);
+  EXPECT_NEAR(world.angular_velocity(b).z(), -30, 1e-9);
+  EXPECT_NEAR(world.velocity(a).y(), 0, 1e-12);
+  EXPECT_NEAR(world.velocity(b).y(), 0, 1e-12);
+}
+
+struct InclineResult {
+  double acceleration;
+  double angular_acceleration;  // about the rolling axis
+};
+
+// A body resting on a horizontal plane of two triangles (shared diagonal crossed on the way)
+// with gravity tilted by alpha; acceleration measured between 0.05 s and 0.25 s.
+InclineResult incline(double alpha_degrees, double mu, bool cylinder) {
+  Material m;
+  m.normal_stiffness = 1e5;
+  m.tangential_stiffness = 4e4;
+  m.friction = mu;
+  DemParameters p;
+  p.gravity = slope_gravity(alpha_degrees);
+  p.user_dt = 2e-6;
+  DemWorld world(p);
+  world.add_triangle({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, m);
+  world.add_triangle({-1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, m);
+  const double r = 0.01;
+  int body = -1;
+  if (cylinder) {
+    const double mass = m.density * std::numbers::pi * r * r * 0.05;
+    body = world.add_cylinder({-0.3, 0.1, r - mass * -p.gravity.z() / m.normal_stiffness},
+                              Eigen::Vector3d::UnitY(), r, 0.05, m);
+  } else {
+    const double mass = m.density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    body = world.add_sphere({-0.3, -0.2, r - mass * -p.gravity.z() / m.normal_stiffness}, r, m);
+  }
+  const auto run_to = [&](double t) {
+    while (world.time() < t - 1e-12) world.step(p.user_dt);
+  };
+  run_to(0.05);
+  const double v0 = world.velocity(body).x();
+  const double w0 = world.angular_velocity(body).y();
+  run_to(0.25);
+  return {(world.velocity(body).x() - v0) / 0.2, (world.angular_velocity(body).y() - w0) / 0.2};
+}
+
+TEST(ContactDynamics, SphereOnInclineRollsOrSlidesAtTanAlphaVersus3p5Mu) {
+  const double g = 9.81;
+  const double mu = 0.2;  // rolling without slip while tan(alpha) <= 3.5 mu = 0.7 (35 degrees)
+  const double rolling_alpha = 25.0 * std::numbers::pi / 180;
+  const InclineResult rolling = incline(25.0, mu, false);
+  const double a_roll = 5.0 / 7.0 * g * std::sin(rolling_alpha);
+  EXPECT_NEAR(rolling.acceleration, a_roll, 0.01 * a_roll);
+  EXPECT_NEAR(rolling.angular_acceleration * 0.01, rolling.acceleration, 0.01 * a_roll);
+
+  const double sliding_alpha = 45.0 * std::numbers::pi / 180;
+  const InclineResult sliding = incline(45.0, mu, false);
+  const double a_slide = g * (std::sin(sliding_alpha) - mu * std::cos(sliding_alpha));
+  EXPECT_NEAR(sliding.acceleration, a_slide, 0.01 * a_slide);
+  // Friction mu m g cos(alpha) at lever R spins it up at 5 mu g cos(alpha) / (2 R).
+  const double spin = 5 * mu * g * std::cos(sliding_alpha) / (2 * 0.01);
+  EXPECT_NEAR(sliding.angular_acceleration, spin, 0.02 * spin);
+}
+
+TEST(ContactDynamics, CylinderRollsOnInclineWithTwoThirdsGSinAlpha) {
+  // Solid cylinder: rolls while tan(alpha) <= 3 mu; a = 2/3 g sin(alpha).
+  const double alpha = 20.0 * std::numbers::pi / 180;
+  const InclineResult rolling = incline(20.0, 0.3, true);
+  const double expected = 2.0 / 3.0 * 9.81 * std::sin(alpha);
+  EXPECT_NEAR(rolling.acceleration, expected, 0.02 * expected);
+  const InclineResult sliding = incline(45.0, 0.2, true);
+  const double a_slide = 9.81 * (std::sin(M_PI / 4) - 0.2 * std::cos(M_PI / 4));
+  EXPECT_NEAR(sliding.acceleration, a_slide, 0.02 * a_slide);
+}
+
+}  // namespace
+}  // namespace cosim::dem

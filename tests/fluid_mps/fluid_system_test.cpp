@@ -1,0 +1,229 @@
+// Unit tests of FluidSystem: coupling hooks, collision, restart, determinism, stability checks.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/restart.hpp"
+#include "cosim/fluid_mps/scenes.hpp"
+
+using namespace cosim::mps;
+
+namespace {
+
+MpsParameters small_parameters() {
+  MpsParameters p;
+  p.particle_spacing = 0.01;
+  p.max_dt = 5e-4;
+  return p;
+}
+
+// Fluid particles 6 l0 apart: beyond every influence radius, so each one only feels gravity and
+// the applied forces (no pressure, viscosity or collision).
+ParticleSet isolated_particles(int count, double spacing) {
+  ParticleSet set;
+  for (int k = 0; k < count; ++k)
+    set.add(Eigen::Vector3d(k * spacing, 0.0, 0.0), ParticleKind::fluid);
+  return set;
+}
+
+MpsParameters dam_parameters(int cells_per_width) {
+  MpsParameters p;
+  p.particle_spacing = 0.05715 / cells_per_width;
+  p.max_dt = 2e-4;
+  return p;
+}
+
+bool same_bits(const FluidSystem& a, const FluidSystem& b) {
+  if (a.particle_count() != b.particle_count() || a.time() != b.time()) return false;
+  for (int i = 0; i < a.particle_count(); ++i) {
+    if (a.positions()[i] != b.positions()[i] || a.velocities()[i] != b.velocities()[i] ||
+        a.pressures()[i] != b.pressures()[i]) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST(MpsFluidSystem, PointForcesGiveExactlySumOfForcesTimesDt) {
+  MpsParameters p = small_parameters();
+  p.gravity.setZero();
+  const double l0 = p.particle_spacing;
+  FluidSystem system(p, isolated_particles(8, 6.0 * l0));
+  const std::vector<Eigen::Vector3d> points{{9.0 * l0, 0.0, 0.0}, {30.0 * l0, 0.0, 0.0}};
+  const std::vector<Eigen::Vector3d> forces{{1.5, -0.25, 0.0}, {-0.3, 0.7, 0.0}};
+  const Eigen::Vector3d before = system.total_fluid_momentum();
+  const ForceDelivery delivery = system.apply_point_forces(points, forces, 13.0 * l0);
+  EXPECT_EQ(delivery.undelivered_points, 0);
+  const double dt = 1e-4;
+  system.step(dt);
+  const Eigen::Vector3d gained = system.total_fluid_momentum() - before;
+  const Eigen::Vector3d expected = (forces[0] + forces[1]) * dt;
+  EXPECT_LT((gained - expected).norm(), 1e-12 * expected.norm() + 1e-15);
+  // The forces act for one step only.
+  const Eigen::Vector3d after_first = system.total_fluid_momentum();
+  system.step(dt);
+  EXPECT_LT((system.total_fluid_momentum() - after_first).norm(), 1e-15);
+}
+
+TEST(MpsFluidSystem, ForcesWithNoFluidNearbyAreReported) {
+  MpsParameters p = small_parameters();
+  p.gravity.setZero();
+  FluidSystem system(p, isolated_particles(3, 0.06));
+  const ForceDelivery delivery =
+      system.apply_point_forces({{0.0, 0.0, 0.0}, {0.0, 0.1, 0.0}}, {{1, 0, 0}, {0, 2, 0}}, 0.02);
+  EXPECT_EQ(delivery.undelivered_points, 1);
+  EXPECT_EQ(delivery.undelivered_force, Eigen::Vector3d(0, 2, 0));
+}
+
+TEST(MpsFluidSystem, SampleVelocityAveragesFluidAndGivesWaterFraction) {
+  MpsParameters p = small_parameters();
+  const double l0 = p.particle_spacing;
+  ParticleSet set = still_water_tank(p, 0.2, 0.1, 0.2);
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    if (set.kinds[i] == ParticleKind::fluid) set.velocities[i] = Eigen::Vector3d(0.3, -0.1, 0);
+  }
+  FluidSystem system(p, set);
+  std::vector<double> fraction;
+  const auto u = system.sample_velocity(
+      {{0.1, 0.05, 0.0}, {0.1, 0.1 - 0.5 * l0, 0.0}, {0.1, 0.5, 0.0}}, 2.0 * l0, &fraction);
+  EXPECT_LT((u[0] - Eigen::Vector3d(0.3, -0.1, 0)).norm(), 1e-12);
+  EXPECT_NEAR(fraction[0], 1.0, 1e-12);
+  EXPECT_GT(fraction[1], 0.3);  // on the free surface: partly water
+  EXPECT_LT(fraction[1], 0.95);
+  EXPECT_EQ(u[2], Eigen::Vector3d::Zero());  // in the air
+  EXPECT_EQ(fraction[2], 0.0);
+}
+
+// Two fluid particles approaching closer than d_c: the collision model keeps momentum and
+// leaves them separating at C_c times the approach speed (seed 001 eq. (11)).
+TEST(MpsFluidSystem, CollisionConservesMomentumAndAppliesRestitution) {
+  MpsParameters p = small_parameters();
+  p.gravity.setZero();
+  p.kinematic_viscosity = 0.0;
+  p.collision_distance_ratio = 1.0;
+  p.collision_restitution = 0.2;
+  const double l0 = p.particle_spacing;
+  ParticleSet set;
+  set.add({0.0, 0.0, 0.0}, ParticleKind::fluid, {0.5, 0.0, 0.0});
+  set.add({0.9 * l0, 0.0, 0.0}, ParticleKind::fluid, {-0.5, 0.0, 0.0});
+  FluidSystem system(p, set);
+  const StepReport report = system.step(1e-5);
+  EXPECT_EQ(report.collisions, 2);
+  EXPECT_LT(system.total_fluid_momentum().norm(), 1e-15);
+  const double separation = system.velocities()[1].x() - system.velocities()[0].x();
+  EXPECT_NEAR(separation, 0.2 * 1.0, 1e-9);
+}
+
+TEST(MpsFluidSystem, StableDtTakesTheSmallestLimit) {
+  MpsParameters p = small_parameters();
+  p.max_dt = 1e-2;
+  p.courant = 0.2;
+  ParticleSet set = isolated_particles(2, 0.1);
+  set.velocities[1] = Eigen::Vector3d(2.0, 0.0, 0.0);
+  FluidSystem system(p, set);
+  EXPECT_DOUBLE_EQ(system.stable_dt(), 0.2 * 0.01 / 2.0);
+  p.kinematic_viscosity = 1.0;  // viscous limit 0.2 l0^2 / nu = 2e-5
+  FluidSystem viscous(p, set);
+  EXPECT_DOUBLE_EQ(viscous.stable_dt(), 0.2 * 1e-4 / 1.0);
+}
+
+TEST(MpsFluidSystem, EscapedParticleThrowsStabilityErrorNamingIt) {
+  MpsParameters p = small_parameters();
+  p.gravity.setZero();
+  p.domain = Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1));
+  ParticleSet set = isolated_particles(3, 0.1);
+  set.positions[2] = Eigen::Vector3d(0.999, 0.0, 0.0);
+  set.velocities[2] = Eigen::Vector3d(10.0, 0.0, 0.0);
+  FluidSystem system(p, set);
+  try {
+    system.step(1e-3);
+    FAIL() << "expected a StabilityError";
+  } catch (const StabilityError& e) {
+    EXPECT_EQ(e.step(), 1);
+    EXPECT_EQ(e.particle(), 2);
+    EXPECT_EQ(e.quantity(), "position");
+    EXPECT_NE(std::string(e.what()).find("particle 2"), std::string::npos);
+  }
+}
+
+TEST(MpsFluidSystem, RunawaySpeedThrowsStabilityError) {
+  MpsParameters p = small_parameters();
+  p.gravity = Eigen::Vector3d(0.0, -1e6, 0.0);
+  p.domain = Eigen::AlignedBox3d(Eigen::Vector3d(-5, -5, -1), Eigen::Vector3d(5, 5, 1));
+  FluidSystem system(p, isolated_particles(2, 0.1));
+  EXPECT_THROW(system.step(1e-3), StabilityError);
+}
+
+TEST(MpsFluidSystem, RestartFromFileContinuesBitForBit) {
+  MpsParameters p = dam_parameters(8);
+  FluidSystem straight(p, dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715));
+  for (int k = 0; k < 40; ++k) straight.step(straight.stable_dt());
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "cosim_fluid_mps_restart_test.bin").string();
+  save_state(straight, path);
+  FluidSystem restarted(p, load_state(path));
+  std::remove(path.c_str());
+  EXPECT_EQ(restarted.step_count(), straight.step_count());
+  EXPECT_TRUE(same_bits(straight, restarted));
+  for (int k = 0; k < 40; ++k) {
+    straight.step(straight.stable_dt());
+    restarted.step(restarted.stable_dt());
+  }
+  EXPECT_TRUE(same_bits(straight, restarted));
+}
+
+// Parallel loops gather per particle and reduce in fixed blocks: thread count must not matter.
+TEST(MpsFluidSystem, SameBitsWithOneAndTwoThreads) {
+  MpsParameters p = dam_parameters(25);  // > 1024 particles, so the loops do run in parallel
+  const ParticleSet set = dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715);
+  ASSERT_GT(set.size(), 2048u);
+  const int threads = omp_get_max_threads();
+  FluidSystem one(p, set), two(p, set);
+  omp_set_num_threads(1);
+  for (int k = 0; k < 30; ++k) one.step(2e-4);
+  omp_set_num_threads(2);
+  for (int k = 0; k < 30; ++k) two.step(2e-4);
+  omp_set_num_threads(threads);
+  EXPECT_TRUE(same_bits(one, two));
+}
+
+// 3D: a cube of water on a wall floor keeps the lattice n0 inside and steps without error.
+TEST(MpsFluidSystem, ThreeDimensionalBlockSteps) {
+  MpsParameters p;
+  p.dimension = 3;
+  p.particle_spacing = 0.02;
+  p.radius_laplacian_over_l0 = 3.1;  // mps_lattice_sums.csv lists 3D radii 2.1 and 3.1
+  p.max_dt = 1e-3;
+  const double l0 = p.particle_spacing;
+  ParticleSet set;
+  const int side = 8, layers = 4;
+  for (int z = -layers; z < side + layers; ++z)
+    for (int y = -layers; y < side; ++y)
+      for (int x = -layers; x < side + layers; ++x) {
+        const int depth = std::max({-y, -x, x - side + 1, -z, z - side + 1, 0});
+        const ParticleKind kind = depth == 0   ? ParticleKind::fluid
+                                  : depth <= 2 ? ParticleKind::wall
+                                               : ParticleKind::dummy;
+        set.add(Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5) * l0, kind);
+      }
+  FluidSystem system(p, set);
+  EXPECT_NEAR(system.n0_density(), 14.418575, 1e-6);
+  // A fluid particle with a full neighbourhood (row 2 above the floor, away from the walls).
+  int interior = -1;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if ((system.positions()[i] - Eigen::Vector3d(4.5, 2.5, 4.5) * l0).norm() < 1e-9) interior = i;
+  }
+  ASSERT_GE(interior, 0);
+  EXPECT_NEAR(system.number_densities()[interior], system.n0_density(), 1e-9);
+  for (int k = 0; k < 20; ++k) system.step(system.stable_dt());
+  EXPECT_LT(system.total_fluid_momentum().norm() / (system.particle_mass() * side * side * side),
+            0.5);
+  EXPECT_GT(system.pressures()[interior], 0.0);
+}

@@ -1,0 +1,46 @@
+// Shared set-ups of the vegetation_beam tests.
+#pragma once
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "cosim/vegetation_beam/plant_field.hpp"
+
+namespace cosim::vegetation::testing {
+
+// Square-ish strip of length 1 m in vacuum without gravity: a textbook cantilever.
+inline PlantSpec textbook_strip(int links) {
+  PlantSpec spec;
+  spec.length = 1.0;
+  spec.links = links;
+  spec.width = 0.01;
+  spec.thickness = 0.01;
+  spec.youngs_modulus = 1e9;
+  spec.density = 1000;
+  return spec;
+}
+
+inline BeamParameters vacuum_parameters() {
+  BeamParameters parameters;
+  parameters.fluid_density = 0;
+  parameters.gravity.setZero();
+  parameters.axial_damping_ratio = 0;
+  parameters.bending_damping_ratio = 0;
+  return parameters;
+}
+
+inline std::vector<Eigen::Vector3d> uniform(const PlantField& field, const Eigen::Vector3d& u) {
+  return std::vector<Eigen::Vector3d>(field.node_count(), u);
+}
+
+// Clamped-free Euler-Bernoulli frequency (Hz) of mode n (1-based), references/cantilever.md.
+inline double cantilever_frequency(int mode, double bending_stiffness, double mass_per_length,
+                                   double length) {
+  constexpr double beta_l_squared[] = {3.516015, 22.034492, 61.697214, 120.901916};
+  return beta_l_squared[mode - 1] *
+         std::sqrt(bending_stiffness / (mass_per_length * std::pow(length, 4))) /
+         (2 * std::numbers::pi);
+}
+
+}  // namespace cosim::vegetation::testing

@@ -1,0 +1,179 @@
+// Flexible plants as chains of nodes (seed 000, section 2(2)): axial spring-dashpots, bending
+// springs between consecutive links, drag on the normal relative velocity, buoyancy, added mass,
+// plant-to-plant contact, and implicit Newmark-beta (beta = 1/4) time integration sub-cycled
+// inside a coupling window. No networking here: the process layer feeds ambient velocities in
+// and takes positions, velocities and the window-mean drag out.
+#pragma once
+
+#include <Eigen/Core>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cosim/vegetation_beam/banded_matrix.hpp"
+
+namespace cosim::vegetation {
+
+// One plant: a straight, unstressed blade or stem clamped at its base.
+struct PlantSpec {
+  Eigen::Vector3d base{0, 0, 0};
+  Eigen::Vector3d direction{0, 1, 0};  // base to tip, unstressed; normalised on construction
+  double length = 0;                   // m
+  int links = 20;                      // nodes = links + 1 (node 0 is the clamped base)
+  double width = 0;                    // frontal width b, m (drag area and contact size)
+  double thickness = 0;                // m
+  double bending_stiffness = 0;        // EI, N m^2; if <= 0: youngs_modulus*width*thickness^3/12
+  double axial_stiffness = 0;          // EA, N; if <= 0: youngs_modulus*width*thickness
+  double youngs_modulus = 0;           // Pa, only used when EI or EA is not given
+  double density = 1000;               // plant material sigma, kg/m^3
+};
+
+struct BeamParameters {
+  double fluid_density = 1000;          // rho, kg/m^3 (0: plant in vacuum)
+  double drag_coefficient = 1.0;        // C_D for flow normal to the plant (eq. 16)
+  double added_mass_coefficient = 1.0;  // C_M (eq. 8)
+  Eigen::Vector3d gravity{0, -9.81, 0};
+  double axial_damping_ratio = 0.1;    // alpha_nv of eq. 14, fraction of critical (0: undamped)
+  double bending_damping_ratio = 0.1;  // alpha_m of eq. 15, fraction of critical (0: undamped)
+  bool contact = true;
+  double contact_stiffness = 0;        // N/m; <= 0: the smallest axial link stiffness EA/l0
+  double contact_damping_ratio = 0.2;  // fraction of critical for a node pair
+  bool rigid = false;                  // nodes never move, drag is still computed
+  double safety_factor = 0.5;          // multiplies the spring-mass step limit
+  int max_substeps = 100000;           // per window; more throws StabilityError
+  double newton_tolerance = 1e-10;     // on the largest position correction, in link lengths
+  int max_newton_iterations = 20;
+};
+
+struct WindowReport {
+  int substeps = 0;
+  double substep = 0;
+  int max_newton_iterations = 0;  // largest Newton iteration count of any sub-step
+};
+
+struct StaticReport {
+  int iterations = 0;
+  double max_correction = 0;  // last Newton correction, m
+};
+
+// Raised on NaN, runaway energy, an escaping node or a step limit; the message names the plant,
+// node, quantity and limit.
+class StabilityError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class PlantField {
+ public:
+  PlantField(std::vector<PlantSpec> plants, BeamParameters parameters);
+
+  int plant_count() const { return static_cast<int>(plants_.size()); }
+  int node_count() const { return static_cast<int>(positions_.size()); }
+  std::pair<int, int> node_range(int plant) const;  // [first, last + 1), base node first
+  const std::vector<PlantSpec>& specs() const { return specs_; }
+  const BeamParameters& parameters() const { return parameters_; }
+
+  const std::vector<Eigen::Vector3d>& positions() const { return positions_; }
+  const std::vector<Eigen::Vector3d>& velocities() const { return velocities_; }
+  double time() const { return time_; }
+
+  // Largest sub-step from the axial (l0 sqrt(m/EA/l0)) and bending ((l0^2/2) sqrt(m/EI))
+  // spring-mass periods with added mass, and the contact spring, times safety_factor.
+  double stable_substep() const;
+  // ceil(window_dt / stable_substep()); throws StabilityError if above max_substeps.
+  int substeps_for(double window_dt) const;
+
+  // Advances one coupling window. Ambient fluid velocity per node (all nodes) at the window's
+  // start and end, interpolated linearly across the sub-steps.
+  WindowReport advance(double window_dt, const std::vector<Eigen::Vector3d>& ambient_begin,
+                       const std::vector<Eigen::Vector3d>& ambient_end);
+  // Per node: force the fluid exerted on the plant (drag), averaged over the last window. The
+  // fluid must take minus this; the average is the Newmark (trapezoidal) impulse / window_dt, so
+  // momentum exchanged with the fluid matches the plant's momentum change exactly.
+  const std::vector<Eigen::Vector3d>& window_mean_drag() const { return window_mean_drag_; }
+
+  // Constant extra force per node (all nodes; base entries are ignored), e.g. a tip load.
+  void set_external_forces(std::vector<Eigen::Vector3d> forces);
+  // Replaces the state (e.g. an initial deflection); accelerations are recomputed lazily.
+  void set_state(std::vector<Eigen::Vector3d> positions, std::vector<Eigen::Vector3d> velocities);
+
+  // Static equilibrium of elastic, contact, gravity-buoyancy and external forces (no fluid) by
+  // Newton's method from the current shape; velocities are set to zero.
+  StaticReport solve_static(double tolerance = 1e-12, int max_iterations = 100);
+
+  double kinetic_energy() const;    // includes the added fluid mass (eq. 8)
+  double elastic_energy() const;    // axial, bending and contact springs
+  double potential_energy() const;  // gravity minus buoyancy and external forces, 0 at start
+  Eigen::Vector3d tip_displacement(int plant) const;
+  // Lowest `count` distinct frequencies (Hz) of the plant linearised about its current shape,
+  // from K x = omega^2 M x (Eigen's generalized self-adjoint solver). The two bending planes of
+  // a straight plant are degenerate and reported once.
+  std::vector<double> linear_natural_frequencies(int plant, int count) const;
+
+ private:
+  // Per-plant constants derived from PlantSpec and BeamParameters (eq. 12-15).
+  struct Plant {
+    int first = 0;              // global index of the base node
+    int links = 0;              // free nodes are first+1 .. first+links
+    double link_length = 0;     // l0
+    double axial_spring = 0;    // k_nv = EA / l0 (eq. 12)
+    double axial_damper = 0;    // c_nv (eq. 14)
+    double bending_spring = 0;  // joint moment per angle EI / l0 (= k_m l0^2 of eq. 13)
+    double bending_damper = 0;  // joint moment per relative angular velocity (eq. 15)
+    double drag_factor = 0;     // 0.5 rho C_D b, multiplied by the node's length share
+    double contact_radius = 0;  // half the width
+    Eigen::Vector3d ghost;      // fixed node mirrored below the base: clamps the rotation
+    double speed_limit = 0;     // faster nodes mean runaway energy
+    double reach_limit = 0;     // nodes farther from the base have escaped
+  };
+
+  std::pair<double, std::string> step_limit() const;  // stable step and what limits it
+  void initialise_accelerations(const std::vector<Eigen::Vector3d>& ambient);
+  int substep(double dt, const std::vector<Eigen::Vector3d>& ambient);
+  void check_state(const std::vector<Eigen::Vector3d>& ambient) const;
+  void update_contact_candidates();
+  void compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
+                              const std::vector<Eigen::Vector3d>& v, bool decide_active_pairs);
+  // Sum of forces on the plant's nodes into `force` (base entry unused) and the drag part into
+  // `drag` (base included). With a Jacobian: adds stiffness_weight * K + damping_weight * C
+  // over the free nodes (local node i-1 for global node first+i).
+  void compute_forces(int plant, const std::vector<Eigen::Vector3d>& x,
+                      const std::vector<Eigen::Vector3d>& v,
+                      const std::vector<Eigen::Vector3d>& ambient, bool include_contact,
+                      std::vector<Eigen::Vector3d>& force, std::vector<Eigen::Vector3d>& drag,
+                      BandedMatrix* jacobian, double stiffness_weight, double damping_weight) const;
+  // Solves jacobian * correction = -residual for one plant (factorising first if asked) and
+  // applies it; returns the largest correction in link lengths.
+  double apply_newton_correction(int plant, BandedMatrix& jacobian,
+                                 const std::vector<Eigen::Vector3d>& residual, bool factorize);
+
+  std::vector<PlantSpec> specs_;
+  BeamParameters parameters_;
+  std::vector<Plant> plants_;
+  std::vector<Eigen::Vector3d> positions_, velocities_, accelerations_;
+  std::vector<Eigen::Vector3d> initial_positions_;
+  std::vector<Eigen::Vector3d> external_forces_, body_forces_;  // body: gravity minus buoyancy
+  std::vector<double> node_mass_, contact_radius_;
+  std::vector<int> node_plant_;
+  std::vector<Eigen::Vector3d> window_mean_drag_;
+  // Scratch of the sub-step (kept to avoid reallocation).
+  std::vector<Eigen::Vector3d> previous_positions_, previous_velocities_, previous_accelerations_;
+  std::vector<Eigen::Vector3d> forces_, drag_, residual_;
+  std::vector<double> correction_;
+  std::vector<BandedMatrix> jacobians_;  // per plant, factorised at a sub-step's first iteration
+  // Contact: candidate node pairs within reach plus a margin, rebuilt when nodes moved.
+  std::vector<std::pair<int, int>> contact_candidates_;
+  std::vector<char> contact_active_;  // per candidate, fixed during a sub-step
+  std::vector<Eigen::Vector3d> candidate_positions_;
+  std::vector<Eigen::Vector3d> contact_forces_;
+  std::vector<Eigen::Matrix3d> contact_stiffness_blocks_, contact_damping_blocks_;
+  std::vector<int> contact_touched_nodes_;
+  std::vector<char> plant_in_contact_;
+  double contact_stiffness_ = 0, contact_damping_ = 0, contact_margin_ = 0;
+  bool candidates_valid_ = false;
+  bool accelerations_valid_ = false;
+  double time_ = 0;
+};
+
+}  // namespace cosim::vegetation

@@ -1,0 +1,498 @@
+// Construction, forces and the sub-cycled implicit Newmark step of the plant field.
+#include "cosim/vegetation_beam/plant_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "beam_elements.hpp"
+#include "cosim/vegetation_beam/banded_matrix.hpp"
+
+namespace cosim::vegetation {
+namespace {
+
+constexpr double kBeta = 0.25;  // Newmark average acceleration (seed eq. 22-23)
+constexpr double kGamma = 0.5;
+constexpr int kHalfBandwidth = 8;  // 3 dofs per node, bending couples neighbours two apart
+
+std::string plant_message(int plant, int node, const std::string& what) {
+  std::ostringstream out;
+  out << "vegetation_beam: plant " << plant << " node " << node << ": " << what;
+  return out.str();
+}
+
+bool finite(const Eigen::Vector3d& v) {
+  return v.allFinite();
+}
+
+}  // namespace
+
+PlantField::PlantField(std::vector<PlantSpec> plants, BeamParameters parameters)
+    : specs_(std::move(plants)), parameters_(std::move(parameters)) {
+  const BeamParameters& p = parameters_;
+  if (!(p.fluid_density >= 0) || !(p.drag_coefficient >= 0) || !(p.added_mass_coefficient >= 0))
+    throw std::invalid_argument(
+        "vegetation_beam: fluid_density, drag_coefficient and "
+        "added_mass_coefficient must be >= 0");
+  if (!(p.safety_factor > 0) || p.max_substeps < 1 || !(p.newton_tolerance > 0) ||
+      p.max_newton_iterations < 1)
+    throw std::invalid_argument(
+        "vegetation_beam: safety_factor, max_substeps, newton_tolerance "
+        "and max_newton_iterations must be positive");
+  if (!(p.axial_damping_ratio >= 0) || !(p.bending_damping_ratio >= 0) ||
+      !(p.contact_damping_ratio >= 0))
+    throw std::invalid_argument("vegetation_beam: damping ratios must be >= 0");
+  double min_node_mass = 0, min_axial_spring = 0;
+  for (std::size_t index = 0; index < specs_.size(); ++index) {
+    PlantSpec& spec = specs_[index];
+    const std::string name = "vegetation_beam: plant " + std::to_string(index) + ": ";
+    if (!(spec.length > 0) || spec.links < 1 || !(spec.width > 0) || !(spec.thickness > 0) ||
+        !(spec.density > 0))
+      throw std::invalid_argument(name +
+                                  "length, width, thickness, density must be > 0 and "
+                                  "links >= 1");
+    if (!spec.base.allFinite() || !(spec.direction.norm() > 0) || !spec.direction.allFinite())
+      throw std::invalid_argument(name + "base must be finite and direction non-zero");
+    spec.direction.normalize();
+    const double area = spec.width * spec.thickness;
+    if (spec.bending_stiffness <= 0)
+      spec.bending_stiffness = spec.youngs_modulus * spec.width * std::pow(spec.thickness, 3) / 12;
+    if (spec.axial_stiffness <= 0) spec.axial_stiffness = spec.youngs_modulus * area;
+    if (!(spec.bending_stiffness > 0) || !(spec.axial_stiffness > 0))
+      throw std::invalid_argument(name +
+                                  "give bending_stiffness and axial_stiffness, or "
+                                  "youngs_modulus > 0");
+
+    Plant plant;
+    plant.first = static_cast<int>(positions_.size());
+    plant.links = spec.links;
+    const double l0 = spec.length / spec.links;
+    plant.link_length = l0;
+    // Eq. 8: the node accelerates its own mass plus C_M times the displaced fluid.
+    const double mass_density = spec.density + p.added_mass_coefficient * p.fluid_density;
+    const double link_mass = mass_density * area * l0;  // M_p of eq. 14-15
+    plant.axial_spring = spec.axial_stiffness / l0;     // eq. 12
+    plant.axial_damper = p.axial_damping_ratio * 2 * std::sqrt(link_mass * plant.axial_spring);
+    // Eq. 13 gives a force k_m = EI / l0^2 at lever l0: a joint moment EI / l0 per angle.
+    plant.bending_spring = spec.bending_stiffness / l0;
+    // Eq. 15 transferred to rotation: inertia M_p l0^2 about the joint.
+    plant.bending_damper =
+        p.bending_damping_ratio * 2 * l0 * std::sqrt(link_mass * plant.bending_spring);
+    plant.drag_factor = 0.5 * p.fluid_density * p.drag_coefficient * spec.width;
+    plant.contact_radius = 0.5 * spec.width;
+    plant.ghost = spec.base - l0 * spec.direction;
+    const double wave_speed = std::sqrt(spec.axial_stiffness / (mass_density * area));
+    plant.speed_limit = wave_speed + 10 * std::sqrt(p.gravity.norm() * spec.length);
+    plant.reach_limit = 1.5 * spec.length;
+    plants_.push_back(plant);
+
+    for (int i = 0; i <= spec.links; ++i) {
+      const double share = (i == 0 || i == spec.links) ? 0.5 * l0 : l0;  // lumped length ds
+      const double volume = area * share;
+      positions_.push_back(spec.base + i * l0 * spec.direction);
+      node_mass_.push_back(mass_density * volume);
+      body_forces_.push_back((spec.density - p.fluid_density) * volume * p.gravity);
+      contact_radius_.push_back(plant.contact_radius);
+      node_plant_.push_back(static_cast<int>(index));
+    }
+    min_node_mass = index == 0 ? link_mass : std::min(min_node_mass, link_mass);
+    min_axial_spring =
+        index == 0 ? plant.axial_spring : std::min(min_axial_spring, plant.axial_spring);
+  }
+  const std::size_t n = positions_.size();
+  initial_positions_ = positions_;
+  velocities_.assign(n, Eigen::Vector3d::Zero());
+  accelerations_.assign(n, Eigen::Vector3d::Zero());
+  external_forces_.assign(n, Eigen::Vector3d::Zero());
+  window_mean_drag_.assign(n, Eigen::Vector3d::Zero());
+  forces_.assign(n, Eigen::Vector3d::Zero());
+  drag_.assign(n, Eigen::Vector3d::Zero());
+  residual_.assign(n, Eigen::Vector3d::Zero());
+  contact_forces_.assign(n, Eigen::Vector3d::Zero());
+  contact_stiffness_blocks_.assign(n, Eigen::Matrix3d::Zero());
+  contact_damping_blocks_.assign(n, Eigen::Matrix3d::Zero());
+  plant_in_contact_.assign(plants_.size(), 0);
+  contact_stiffness_ = p.contact_stiffness > 0 ? p.contact_stiffness : min_axial_spring;
+  // A node pair: reduced mass m/2, critical damping 2 sqrt(k m / 2).
+  contact_damping_ =
+      p.contact_damping_ratio * 2 * std::sqrt(contact_stiffness_ * 0.5 * min_node_mass);
+  double max_radius = 0;
+  for (const Plant& plant : plants_) max_radius = std::max(max_radius, plant.contact_radius);
+  contact_margin_ = max_radius;
+}
+
+std::pair<int, int> PlantField::node_range(int plant) const {
+  const Plant& p = plants_.at(plant);
+  return {p.first, p.first + p.links + 1};
+}
+
+std::pair<double, std::string> PlantField::step_limit() const {
+  double best = std::numeric_limits<double>::infinity();
+  std::string reason = "no plants";
+  double min_link_mass = std::numeric_limits<double>::infinity();
+  for (int index = 0; index < plant_count(); ++index) {
+    const Plant& plant = plants_[index];
+    const PlantSpec& spec = specs_[index];
+    const double link_mass = node_mass_[plant.first + 1] *
+                             (plant.links == 1 ? 2.0 : 1.0);  // tip node carries half a link
+    min_link_mass = std::min(min_link_mass, link_mass);
+    // Lumped chain: axial dt < sqrt(m / k_nv) = l0 sqrt(rho/E); bending dt < (l0^2/2)
+    // sqrt(m'/EI) with m' the mass per length (references/cantilever.md).
+    const double axial = std::sqrt(link_mass / plant.axial_spring);
+    const double l0 = plant.link_length;
+    const double bending = 0.5 * l0 * l0 * std::sqrt(link_mass / l0 / spec.bending_stiffness);
+    if (axial < best) {
+      best = axial;
+      reason = "axial spring-mass period of plant " + std::to_string(index) +
+               " (axial_stiffness EA = " + std::to_string(spec.axial_stiffness) +
+               " N, link length " + std::to_string(l0) + " m)";
+    }
+    if (bending < best) {
+      best = bending;
+      reason = "bending spring-mass period of plant " + std::to_string(index) +
+               " (bending_stiffness EI = " + std::to_string(spec.bending_stiffness) +
+               " N m^2, link length " + std::to_string(l0) + " m)";
+    }
+  }
+  if (parameters_.contact && plant_count() > 1) {
+    const double contact = std::sqrt(min_link_mass / contact_stiffness_);
+    if (contact < best) {
+      best = contact;
+      reason =
+          "contact spring-mass period (contact_stiffness = " + std::to_string(contact_stiffness_) +
+          " N/m)";
+    }
+  }
+  return {parameters_.safety_factor * best, reason};
+}
+
+double PlantField::stable_substep() const {
+  return step_limit().first;
+}
+
+int PlantField::substeps_for(double window_dt) const {
+  if (!(window_dt > 0) || !std::isfinite(window_dt))
+    throw std::invalid_argument("vegetation_beam: window_dt must be positive and finite");
+  const auto [dt, reason] = step_limit();
+  // The relative slack keeps an exact multiple from rounding up to one more sub-step.
+  const double needed = std::ceil(window_dt / dt * (1 - 1e-12));
+  if (needed > parameters_.max_substeps) {
+    std::ostringstream out;
+    out << "vegetation_beam: window of " << window_dt << " s needs " << needed << " sub-steps of "
+        << dt << " s, above max_substeps = " << parameters_.max_substeps
+        << "; the step is limited by the " << reason << " with safety_factor "
+        << parameters_.safety_factor;
+    throw StabilityError(out.str());
+  }
+  return std::max(1, static_cast<int>(needed));
+}
+
+void PlantField::set_external_forces(std::vector<Eigen::Vector3d> forces) {
+  if (forces.size() != positions_.size())
+    throw std::invalid_argument("vegetation_beam: external forces need one entry per node");
+  external_forces_ = std::move(forces);
+  accelerations_valid_ = false;
+}
+
+void PlantField::set_state(std::vector<Eigen::Vector3d> positions,
+                           std::vector<Eigen::Vector3d> velocities) {
+  if (positions.size() != positions_.size() || velocities.size() != positions_.size())
+    throw std::invalid_argument("vegetation_beam: set_state needs one entry per node");
+  positions_ = std::move(positions);
+  velocities_ = std::move(velocities);
+  for (const Plant& plant : plants_) {  // the base stays clamped
+    positions_[plant.first] = initial_positions_[plant.first];
+    velocities_[plant.first].setZero();
+  }
+  accelerations_valid_ = false;
+  candidates_valid_ = false;
+}
+
+void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector3d>& x,
+                                const std::vector<Eigen::Vector3d>& v,
+                                const std::vector<Eigen::Vector3d>& ambient, bool include_contact,
+                                std::vector<Eigen::Vector3d>& force,
+                                std::vector<Eigen::Vector3d>& drag, BandedMatrix* jacobian,
+                                double stiffness_weight, double damping_weight) const {
+  const Plant& plant = plants_[plant_index];
+  const int first = plant.first, links = plant.links;
+  const double l0 = plant.link_length;
+  // Free node global index first + i has local block index i - 1; the base (i = 0) has none.
+  auto add = [&](int i, int j, const Eigen::Matrix3d& block, double weight) {
+    if (jacobian != nullptr && i > 0 && j > 0) jacobian->add_block(i - 1, j - 1, block, weight);
+  };
+  for (int i = 0; i <= links; ++i) {
+    force[first + i] = body_forces_[first + i] + external_forces_[first + i];
+  }
+
+  // Axial links (eq. 9).
+  for (int i = 1; i <= links; ++i) {
+    const AxialLink link = axial_link(x[first + i - 1], x[first + i], v[first + i - 1],
+                                      v[first + i], plant.axial_spring, plant.axial_damper, l0);
+    force[first + i] += link.force_on_b;
+    force[first + i - 1] -= link.force_on_b;
+    for (const auto& [a, b, sign] : {std::tuple{i, i, 1.0}, std::tuple{i - 1, i - 1, 1.0},
+                                     std::tuple{i, i - 1, -1.0}, std::tuple{i - 1, i, -1.0}}) {
+      add(a, b, link.stiffness, sign * stiffness_weight);
+      add(a, b, link.damping, sign * damping_weight);
+    }
+  }
+
+  // Bending joints (eq. 10-11). Joint 0 uses the ghost node below the base; it carries the
+  // curvature of only half a link (the other half is inside the clamp), hence 2 EI / l0, which
+  // makes the clamp second-order accurate (references/cantilever.md).
+  BendingJoint joint;
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  for (int j = 0; j < links; ++j) {
+    const Eigen::Vector3d nodes[3] = {j == 0 ? plant.ghost : x[first + j - 1], x[first + j],
+                                      x[first + j + 1]};
+    const Eigen::Vector3d rates[3] = {j == 0 ? zero : v[first + j - 1], v[first + j],
+                                      v[first + j + 1]};
+    const double scale = j == 0 ? 2.0 : 1.0;
+    bending_joint(nodes, rates, scale * plant.bending_spring,
+                  std::sqrt(scale) * plant.bending_damper, jacobian != nullptr, joint);
+    for (int n = 0; n < 3; ++n) {
+      const int node = j - 1 + n;  // -1 is the ghost
+      if (node >= 0) force[first + node] += joint.force[n];
+    }
+    if (jacobian == nullptr) continue;
+    for (int n = 0; n < 3; ++n) {
+      for (int m = 0; m < 3; ++m) {
+        add(j - 1 + n, j - 1 + m, joint.stiffness[n][m], stiffness_weight);
+        add(j - 1 + n, j - 1 + m, joint.damping[n][m], damping_weight);
+      }
+    }
+  }
+
+  // Drag on the normal relative velocity (eq. 16), per node with its lumped length ds. The
+  // position dependence through the tangent is left out of the Jacobian (quasi-Newton).
+  if (plant.drag_factor > 0) {
+    for (int i = 0; i <= links; ++i) {
+      const int lo = std::max(i - 1, 0), hi = std::min(i + 1, links);
+      const Eigen::Vector3d tangent = (x[first + hi] - x[first + lo]).normalized();
+      const double share = (i == 0 || i == links) ? 0.5 * l0 : l0;
+      const NodeDrag d =
+          node_drag(tangent, ambient[first + i], v[first + i], plant.drag_factor * share);
+      drag[first + i] = d.force;
+      force[first + i] += d.force;
+      add(i, i, d.damping, damping_weight);
+    }
+  } else {
+    for (int i = 0; i <= links; ++i) drag[first + i].setZero();
+  }
+
+  if (include_contact && plant_in_contact_[plant_index]) {
+    for (int i = 1; i <= links; ++i) {
+      force[first + i] += contact_forces_[first + i];
+      add(i, i, contact_stiffness_blocks_[first + i], stiffness_weight);
+      add(i, i, contact_damping_blocks_[first + i], damping_weight);
+    }
+  }
+}
+
+void PlantField::initialise_accelerations(const std::vector<Eigen::Vector3d>& ambient) {
+  const bool contact = parameters_.contact && plant_count() > 1 && !parameters_.rigid;
+  if (contact) {
+    update_contact_candidates();
+    compute_contact_forces(positions_, velocities_, true);
+  }
+  for (int p = 0; p < plant_count(); ++p) {
+    compute_forces(p, positions_, velocities_, ambient, contact, forces_, drag_, nullptr, 0, 0);
+    const Plant& plant = plants_[p];
+    accelerations_[plant.first].setZero();
+    for (int i = 1; i <= plant.links; ++i) {
+      const int node = plant.first + i;
+      accelerations_[node] = parameters_.rigid ? Eigen::Vector3d::Zero().eval()
+                                               : (forces_[node] / node_mass_[node]).eval();
+    }
+  }
+  accelerations_valid_ = true;
+}
+
+double PlantField::apply_newton_correction(int plant_index, BandedMatrix& jacobian,
+                                           const std::vector<Eigen::Vector3d>& residual,
+                                           bool factorize) {
+  const Plant& plant = plants_[plant_index];
+  correction_.resize(3 * plant.links);
+  for (int i = 1; i <= plant.links; ++i)
+    for (int d = 0; d < 3; ++d) correction_[3 * (i - 1) + d] = -residual[plant.first + i][d];
+  if (factorize && !jacobian.factorize())
+    throw StabilityError(plant_message(plant_index, 0,
+                                       "singular Newton Jacobian (step too large for the "
+                                       "stiffness; lower safety_factor)"));
+  jacobian.solve(correction_);
+  double largest = 0;
+  for (int i = 1; i <= plant.links; ++i) {
+    const Eigen::Vector3d dx(correction_[3 * (i - 1)], correction_[3 * (i - 1) + 1],
+                             correction_[3 * (i - 1) + 2]);
+    positions_[plant.first + i] += dx;
+    largest = std::max(largest, dx.cwiseAbs().maxCoeff());
+  }
+  return largest / plant.link_length;
+}
+
+int PlantField::substep(double dt, const std::vector<Eigen::Vector3d>& ambient) {
+  const std::size_t n = positions_.size();
+  if (parameters_.rigid) {  // nodes stay put; only the drag at rest is needed
+    for (const Plant& plant : plants_) {
+      for (int i = 0; i <= plant.links; ++i) {
+        const int lo = plant.first + std::max(i - 1, 0);
+        const int hi = plant.first + std::min(i + 1, plant.links);
+        const double share = (i == 0 || i == plant.links) ? 0.5 : 1.0;
+        drag_[plant.first + i] =
+            node_drag((positions_[hi] - positions_[lo]).normalized(), ambient[plant.first + i],
+                      Eigen::Vector3d::Zero(), share * plant.link_length * plant.drag_factor)
+                .force;
+      }
+    }
+    return 0;
+  }
+  previous_positions_ = positions_;
+  previous_velocities_ = velocities_;
+  previous_accelerations_ = accelerations_;
+  const double mass_weight = 1.0 / (kBeta * dt * dt);
+  const double damping_weight = kGamma / (kBeta * dt);
+  // Predictor: constant acceleration.
+  for (const Plant& plant : plants_) {
+    for (int i = 1; i <= plant.links; ++i) {
+      const int k = plant.first + i;
+      positions_[k] += dt * velocities_[k] + 0.5 * dt * dt * accelerations_[k];
+    }
+  }
+  const bool contact = parameters_.contact && plant_count() > 1;
+  if (contact) update_contact_candidates();
+  std::vector<char> converged(plants_.size(), 0);
+  jacobians_.resize(plants_.size());
+  for (int iteration = 1; iteration <= parameters_.max_newton_iterations; ++iteration) {
+    // Newmark relations (eq. 22-23) give acceleration and velocity from the trial position.
+    for (std::size_t k = 0; k < n; ++k) {
+      if (node_mass_[k] == 0) continue;
+      accelerations_[k] =
+          (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
+          (0.5 / kBeta - 1.0) * previous_accelerations_[k];
+      velocities_[k] = previous_velocities_[k] + dt * ((1 - kGamma) * previous_accelerations_[k] +
+                                                       kGamma * accelerations_[k]);
+    }
+    for (const Plant& plant : plants_) {  // clamped base
+      accelerations_[plant.first].setZero();
+      velocities_[plant.first].setZero();
+    }
+    if (contact) compute_contact_forces(positions_, velocities_, iteration == 1);
+    bool all_converged = true;
+    for (int p = 0; p < plant_count(); ++p) {
+      if (converged[p] && !plant_in_contact_[p]) continue;
+      const Plant& plant = plants_[p];
+      // Modified Newton: the Jacobian of the first iteration is kept for the sub-step (later
+      // iterations mostly resolve plant-to-plant contact, which it treats per node anyway).
+      const bool factorize = iteration == 1;
+      BandedMatrix& jacobian = jacobians_[p];
+      if (factorize) jacobian.resize(3 * plant.links, kHalfBandwidth);
+      compute_forces(p, positions_, velocities_, ambient, contact, forces_, drag_,
+                     factorize ? &jacobian : nullptr, 1.0, damping_weight);
+      for (int i = 1; i <= plant.links; ++i) {
+        const int k = plant.first + i;
+        residual_[k] = node_mass_[k] * accelerations_[k] - forces_[k];
+        if (!factorize) continue;
+        for (int d = 0; d < 3; ++d)
+          jacobian.add_diagonal(3 * (i - 1) + d, node_mass_[k] * mass_weight);
+      }
+      const double correction = apply_newton_correction(p, jacobian, residual_, factorize);
+      if (!std::isfinite(correction))
+        throw StabilityError(plant_message(p, 0, "Newton correction is not finite"));
+      converged[p] = correction <= parameters_.newton_tolerance;
+      all_converged = all_converged && converged[p];
+    }
+    if (all_converged) {
+      for (std::size_t k = 0; k < n; ++k) {  // state consistent with the final position
+        if (node_mass_[k] == 0) continue;
+        accelerations_[k] =
+            (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
+            (0.5 / kBeta - 1.0) * previous_accelerations_[k];
+        velocities_[k] = previous_velocities_[k] + dt * ((1 - kGamma) * previous_accelerations_[k] +
+                                                         kGamma * accelerations_[k]);
+      }
+      for (const Plant& plant : plants_) {
+        accelerations_[plant.first].setZero();
+        velocities_[plant.first].setZero();
+      }
+      return iteration;
+    }
+  }
+  int worst = 0;
+  while (worst < plant_count() && converged[worst]) ++worst;
+  std::ostringstream out;
+  out << "Newton iteration did not reach newton_tolerance = " << parameters_.newton_tolerance
+      << " within max_newton_iterations = " << parameters_.max_newton_iterations
+      << " at t = " << time_;
+  throw StabilityError(plant_message(worst, 0, out.str()));
+}
+
+void PlantField::check_state(const std::vector<Eigen::Vector3d>& ambient) const {
+  for (int p = 0; p < plant_count(); ++p) {
+    const Plant& plant = plants_[p];
+    double ambient_speed = 0;
+    for (int i = 0; i <= plant.links; ++i)
+      ambient_speed = std::max(ambient_speed, ambient[plant.first + i].norm());
+    const double speed_limit = plant.speed_limit + 10 * ambient_speed;
+    const auto when = [this] { return " at t = " + std::to_string(time_) + " s"; };
+    for (int i = 1; i <= plant.links; ++i) {
+      const int k = plant.first + i;
+      if (!finite(positions_[k]) || !finite(velocities_[k]))
+        throw StabilityError(plant_message(p, i, "position or velocity is NaN/inf" + when()));
+      const double speed = velocities_[k].norm();
+      if (speed > speed_limit) {
+        std::ostringstream what;
+        what << "runaway kinetic energy: speed " << speed << " m/s exceeds " << speed_limit
+             << " m/s (axial wave speed + 10 sqrt(g L) + 10 |ambient|)" << when();
+        throw StabilityError(plant_message(p, i, what.str()));
+      }
+      const double reach = (positions_[k] - positions_[plant.first]).norm();
+      if (reach > plant.reach_limit) {
+        std::ostringstream what;
+        what << "node escaped: distance from base " << reach
+             << " m exceeds 1.5 length = " << plant.reach_limit << " m" << when();
+        throw StabilityError(plant_message(p, i, what.str()));
+      }
+    }
+  }
+}
+
+WindowReport PlantField::advance(double window_dt,
+                                 const std::vector<Eigen::Vector3d>& ambient_begin,
+                                 const std::vector<Eigen::Vector3d>& ambient_end) {
+  const std::size_t n = positions_.size();
+  if (ambient_begin.size() != n || ambient_end.size() != n)
+    throw std::invalid_argument("vegetation_beam: ambient velocities need one entry per node");
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!finite(ambient_begin[k]) || !finite(ambient_end[k])) {
+      const int p = node_plant_[k];
+      throw StabilityError(plant_message(p, static_cast<int>(k) - plants_[p].first,
+                                         "ambient fluid velocity is NaN/inf"));
+    }
+  }
+  WindowReport report;
+  report.substeps = substeps_for(window_dt);
+  report.substep = window_dt / report.substeps;
+  if (!accelerations_valid_) initialise_accelerations(ambient_begin);
+
+  std::vector<Eigen::Vector3d> ambient(n);
+  std::vector<Eigen::Vector3d> impulse(n, Eigen::Vector3d::Zero());
+  const double start = time_;
+  const double half = 0.5 * report.substep;
+  for (int step = 1; step <= report.substeps; ++step) {
+    const double s = static_cast<double>(step) / report.substeps;
+    for (std::size_t k = 0; k < n; ++k)
+      ambient[k] = (1 - s) * ambient_begin[k] + s * ambient_end[k];
+    // Trapezoidal drag impulse, the same weighting Newmark's velocity update gives it.
+    for (std::size_t k = 0; k < n; ++k) impulse[k] += half * drag_[k];
+    const int iterations = substep(report.substep, ambient);
+    for (std::size_t k = 0; k < n; ++k) impulse[k] += half * drag_[k];
+    report.max_newton_iterations = std::max(report.max_newton_iterations, iterations);
+    time_ = start + s * window_dt;
+    check_state(ambient);
+  }
+  for (std::size_t k = 0; k < n; ++k) window_mean_drag_[k] = impulse[k] / window_dt;
+  return report;
+}
+
+}  // namespace cosim::vegetation

@@ -1,0 +1,219 @@
+// Plant-to-plant contact, energies, static solve and linear natural frequencies.
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include "beam_elements.hpp"
+#include "cosim/vegetation_beam/banded_matrix.hpp"
+#include "cosim/vegetation_beam/plant_field.hpp"
+
+namespace cosim::vegetation {
+namespace {
+
+// Cell key of a uniform grid; 21 bits per axis, wrapping far away (the distance test removes
+// any false neighbour a wrap produces).
+std::uint64_t cell_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
+  constexpr std::uint64_t mask = (1u << 21) - 1;
+  return (static_cast<std::uint64_t>(ix) & mask) | ((static_cast<std::uint64_t>(iy) & mask) << 21) |
+         ((static_cast<std::uint64_t>(iz) & mask) << 42);
+}
+
+}  // namespace
+
+void PlantField::update_contact_candidates() {
+  const std::size_t n = positions_.size();
+  if (candidates_valid_) {
+    // The list holds every pair within reach + margin; it stays complete while no node has
+    // moved more than half the margin.
+    double moved = 0;
+    for (std::size_t k = 0; k < n; ++k)
+      moved = std::max(moved, (positions_[k] - candidate_positions_[k]).squaredNorm());
+    if (std::sqrt(moved) < 0.5 * contact_margin_) return;
+  }
+  candidate_positions_ = positions_;
+  candidates_valid_ = true;
+  contact_candidates_.clear();
+  double max_radius = 0;
+  for (double r : contact_radius_) max_radius = std::max(max_radius, r);
+  const double cell = 2 * max_radius + contact_margin_;
+  std::vector<std::pair<std::uint64_t, int>> keyed(n);
+  std::vector<Eigen::Vector3i> cells(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3d scaled = positions_[k] / cell;
+    cells[k] = Eigen::Vector3i(static_cast<int>(std::floor(scaled.x())),
+                               static_cast<int>(std::floor(scaled.y())),
+                               static_cast<int>(std::floor(scaled.z())));
+    keyed[k] = {cell_key(cells[k].x(), cells[k].y(), cells[k].z()), static_cast<int>(k)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  for (std::size_t a = 0; a < n; ++a) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const std::uint64_t key =
+              cell_key(cells[a].x() + dx, cells[a].y() + dy, cells[a].z() + dz);
+          auto it = std::lower_bound(keyed.begin(), keyed.end(), std::pair{key, -1});
+          for (; it != keyed.end() && it->first == key; ++it) {
+            const std::size_t b = static_cast<std::size_t>(it->second);
+            if (b <= a || node_plant_[a] == node_plant_[b]) continue;
+            const bool a_base = plants_[node_plant_[a]].first == static_cast<int>(a);
+            const bool b_base = plants_[node_plant_[b]].first == static_cast<int>(b);
+            if (a_base && b_base) continue;  // two clamped nodes never move
+            const double reach = contact_radius_[a] + contact_radius_[b] + contact_margin_;
+            if ((positions_[a] - positions_[b]).squaredNorm() < reach * reach)
+              contact_candidates_.emplace_back(static_cast<int>(a), static_cast<int>(b));
+          }
+        }
+      }
+    }
+  }
+}
+
+void PlantField::compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
+                                        const std::vector<Eigen::Vector3d>& v,
+                                        bool decide_active_pairs) {
+  for (int k : contact_touched_nodes_) {
+    contact_forces_[k].setZero();
+    contact_stiffness_blocks_[k].setZero();
+    contact_damping_blocks_[k].setZero();
+  }
+  contact_touched_nodes_.clear();
+  std::fill(plant_in_contact_.begin(), plant_in_contact_.end(), 0);
+  if (decide_active_pairs) contact_active_.assign(contact_candidates_.size(), 0);
+  for (std::size_t pair = 0; pair < contact_candidates_.size(); ++pair) {
+    const auto [a, b] = contact_candidates_[pair];
+    const Eigen::Vector3d r = x[a] - x[b];
+    const double distance = r.norm();
+    const double reach = contact_radius_[a] + contact_radius_[b];
+    // The set of touching pairs is fixed at the predictor of each sub-step: letting pairs
+    // switch inside the Newton loop makes it cycle between the two sides of the contact edge.
+    if (decide_active_pairs) contact_active_[pair] = distance < reach && distance > 0;
+    if (!contact_active_[pair] || distance == 0) continue;
+    // Normal spring-dashpot of eq. 18-21; the tangential (friction) part of the seed is left
+    // out.
+    const Eigen::Vector3d e = r / distance;
+    const double approach = (v[a] - v[b]).dot(e);
+    const double normal = contact_stiffness_ * (reach - distance) - contact_damping_ * approach;
+    const Eigen::Matrix3d along = e * e.transpose();
+    for (const auto& [node, sign] : {std::pair{a, 1.0}, std::pair{b, -1.0}}) {
+      contact_forces_[node] += sign * normal * e;
+      // Only the node's own block goes into the Jacobian (plants are solved one at a time).
+      contact_stiffness_blocks_[node] += contact_stiffness_ * along;
+      contact_damping_blocks_[node] += contact_damping_ * along;
+      contact_touched_nodes_.push_back(node);
+      plant_in_contact_[node_plant_[node]] = 1;
+    }
+  }
+}
+
+double PlantField::kinetic_energy() const {
+  double energy = 0;
+  for (const Plant& plant : plants_)
+    for (int i = 1; i <= plant.links; ++i)
+      energy += 0.5 * node_mass_[plant.first + i] * velocities_[plant.first + i].squaredNorm();
+  return energy;
+}
+
+double PlantField::elastic_energy() const {
+  double energy = 0;
+  BendingJoint joint;
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d rates[3] = {zero, zero, zero};
+  for (const Plant& plant : plants_) {
+    const int first = plant.first;
+    for (int i = 1; i <= plant.links; ++i) {
+      energy += axial_link(positions_[first + i - 1], positions_[first + i], zero, zero,
+                           plant.axial_spring, 0, plant.link_length)
+                    .energy;
+    }
+    for (int j = 0; j < plant.links; ++j) {
+      const Eigen::Vector3d nodes[3] = {j == 0 ? plant.ghost : positions_[first + j - 1],
+                                        positions_[first + j], positions_[first + j + 1]};
+      bending_joint(nodes, rates, (j == 0 ? 2.0 : 1.0) * plant.bending_spring, 0, false, joint);
+      energy += joint.energy;
+    }
+  }
+  if (parameters_.contact) {
+    for (const auto& [a, b] : contact_candidates_) {
+      const double overlap =
+          contact_radius_[a] + contact_radius_[b] - (positions_[a] - positions_[b]).norm();
+      if (overlap > 0) energy += 0.5 * contact_stiffness_ * overlap * overlap;
+    }
+  }
+  return energy;
+}
+
+double PlantField::potential_energy() const {
+  double energy = 0;
+  for (std::size_t k = 0; k < positions_.size(); ++k)
+    energy -= (body_forces_[k] + external_forces_[k]).dot(positions_[k] - initial_positions_[k]);
+  return energy;
+}
+
+Eigen::Vector3d PlantField::tip_displacement(int plant) const {
+  const Plant& p = plants_.at(plant);
+  const int tip = p.first + p.links;
+  return positions_[tip] - initial_positions_[tip];
+}
+
+StaticReport PlantField::solve_static(double tolerance, int max_iterations) {
+  StaticReport report;
+  const std::size_t n = positions_.size();
+  std::fill(velocities_.begin(), velocities_.end(), Eigen::Vector3d::Zero());
+  const std::vector<Eigen::Vector3d> still(n, Eigen::Vector3d::Zero());
+  const bool contact = parameters_.contact && plant_count() > 1;
+  BandedMatrix jacobian;
+  std::vector<char> converged(plants_.size(), 0);
+  for (report.iterations = 1; report.iterations <= max_iterations; ++report.iterations) {
+    if (contact) {
+      update_contact_candidates();
+      compute_contact_forces(positions_, velocities_, true);
+    }
+    bool all_converged = true;
+    report.max_correction = 0;
+    for (int p = 0; p < plant_count(); ++p) {
+      const Plant& plant = plants_[p];
+      jacobian.resize(3 * plant.links, 8);
+      compute_forces(p, positions_, still, still, contact, forces_, drag_, &jacobian, 1.0, 0.0);
+      for (int i = 1; i <= plant.links; ++i) residual_[plant.first + i] = -forces_[plant.first + i];
+      const double correction = apply_newton_correction(p, jacobian, residual_, true);
+      report.max_correction = std::max(report.max_correction, correction * plant.link_length);
+      converged[p] = correction <= tolerance;
+      all_converged = all_converged && converged[p];
+    }
+    if (all_converged) break;
+  }
+  if (report.iterations > max_iterations)
+    throw StabilityError("vegetation_beam: static solve did not converge in " +
+                         std::to_string(max_iterations) + " Newton iterations");
+  accelerations_valid_ = false;
+  return report;
+}
+
+std::vector<double> PlantField::linear_natural_frequencies(int plant_index, int count) const {
+  const Plant& plant = plants_.at(plant_index);
+  const int dofs = 3 * plant.links;
+  BandedMatrix stiffness;
+  stiffness.resize(dofs, 8);
+  std::vector<Eigen::Vector3d> force(positions_.size()), drag(positions_.size());
+  const std::vector<Eigen::Vector3d> still(positions_.size(), Eigen::Vector3d::Zero());
+  compute_forces(plant_index, positions_, still, still, false, force, drag, &stiffness, 1.0, 0.0);
+  const Eigen::MatrixXd k = stiffness.to_dense();
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(dofs, dofs);
+  for (int i = 1; i <= plant.links; ++i)
+    for (int d = 0; d < 3; ++d) m(3 * (i - 1) + d, 3 * (i - 1) + d) = node_mass_[plant.first + i];
+  const Eigen::MatrixXd symmetric = 0.5 * (k + k.transpose());
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(symmetric, m,
+                                                                   Eigen::EigenvaluesOnly);
+  std::vector<double> frequencies;
+  for (int i = 0; i < dofs && static_cast<int>(frequencies.size()) < count; ++i) {
+    const double f = std::sqrt(std::max(0.0, solver.eigenvalues()(i))) / (2 * std::numbers::pi);
+    if (!frequencies.empty() && std::abs(f - frequencies.back()) <= 1e-6 * f) continue;
+    frequencies.push_back(f);
+  }
+  return frequencies;
+}
+
+}  // namespace cosim::vegetation
