@@ -8,6 +8,9 @@
 #include <cmath>
 #include <thread>
 
+#include <unistd.h>
+#include <cstdio>
+
 namespace cosim::coupler {
 
 namespace {
@@ -164,12 +167,14 @@ void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
 
 void Coupler::show_progress(int64_t index, double time, bool force) {
   if (!options_.show_progress) return;
-  if (!force && seconds_since(last_progress_) < 1.0) return;
+  // A terminal gets one line updated every second; a log file a new line every 10 s.
+  static const bool terminal = isatty(fileno(stderr));
+  if (!force && seconds_since(last_progress_) < (terminal ? 1.0 : 10.0)) return;
   last_progress_ = Clock::now();
   const int64_t total = scene_.total_windows();
-  fmt::print(stderr, "\r[{}] window {}/{}  t = {:.4f} s of {:.4f} s  wall {:.1f} s   ", scene_.name,
-             index, total, time, scene_.duration, seconds_since(started_));
-  if (force) fmt::print(stderr, "\n");
+  fmt::print(stderr, "{}[{}] window {}/{}  t = {:.4f} s of {:.4f} s  wall {:.1f} s   {}",
+             terminal ? "\r" : "", scene_.name, index, total, time, scene_.duration,
+             seconds_since(started_), terminal && !force ? "" : "\n");
 }
 
 RunResult Coupler::run(ProcessGroup& processes) {

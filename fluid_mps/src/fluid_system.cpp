@@ -9,7 +9,7 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/pressure_solver.hpp"
 
-// Loops run in parallel from 1024 items on (the `if` clauses below): under that the OpenMP
+// Loops run in parallel from 4096 items on (the `if` clauses below): under that the OpenMP
 // fork/join costs more than the work, and oversubscribed CI cores make it far worse.
 namespace cosim::mps {
 namespace {
@@ -188,7 +188,7 @@ StepReport FluidSystem::step(double dt) {
   std::vector<double> density_now(n, 0.0);
   std::vector<Eigen::Vector3d> velocity_star(velocities_);
   std::vector<Eigen::Vector3d> position_star(positions_);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     double density_sum = 0.0;
     for (int k = list.begin(i); k < list.end(i); ++k) density_sum += weight(list.distance[k], re_n);
@@ -220,7 +220,7 @@ StepReport FluidSystem::step(double dt) {
     list = grid.neighbours(position_star, collision_distance);
     std::vector<Eigen::Vector3d> correction(n, Eigen::Vector3d::Zero());
     std::vector<int> collided(n, 0);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
     for (int i = 0; i < n; ++i) {
       if (!is_fluid(kinds_[i])) continue;
       for (int k = list.begin(i); k < list.end(i); ++k) {
@@ -249,7 +249,7 @@ StepReport FluidSystem::step(double dt) {
   // Velocity divergence at r* with the density radius (seed 001 eq. (8) applied to u . r_ij).
   number_densities_.assign(n, 0.0);
   std::vector<double> divergence(n, 0.0);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     double sum = 0.0, divergence_sum = 0.0;
     for (int k = list.begin(i); k < list.end(i); ++k) {
@@ -289,7 +289,7 @@ StepReport FluidSystem::step(double dt) {
   const double scale = lambda * n0_l * p.density / (2.0 * d * dt * dt);
   SparseRows matrix;
   std::vector<std::int64_t> row_length(m + 1, 0);
-#pragma omp parallel for schedule(static) if (m >= 1024)
+#pragma omp parallel for schedule(static) if (m >= 4096)
   for (int row = 0; row < m; ++row) {
     const int i = unknown_particle[row];
     std::int64_t count = 1;
@@ -303,7 +303,7 @@ StepReport FluidSystem::step(double dt) {
   matrix.column.resize(row_length[m]);
   matrix.value.resize(row_length[m]);
   std::vector<double> rhs(m), solution(m);
-#pragma omp parallel for schedule(static) if (m >= 1024)
+#pragma omp parallel for schedule(static) if (m >= 4096)
   for (int row = 0; row < m; ++row) {
     const int i = unknown_particle[row];
     std::int64_t slot = matrix.offset[row];
@@ -350,7 +350,7 @@ StepReport FluidSystem::step(double dt) {
   std::vector<Eigen::Vector3d> next_velocity(velocity_star);
   std::vector<Eigen::Vector3d> next_position(position_star);
   const double gradient_factor = dt / p.density * d / n0_g;
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds_[i])) continue;
     double minimum = pressure[i];

@@ -49,7 +49,7 @@ void NeighbourGrid::build(const std::vector<Eigen::Vector3d>& positions) {
   const std::size_t cell_count = static_cast<std::size_t>(cells_.x()) * cells_.y() * cells_.z();
   const int n = static_cast<int>(positions.size());
   std::vector<std::int64_t> cell_index(n);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) cell_index[i] = linear(cell_of(positions[i]));
   // Counting sort: stable, so particles of one cell stay in index order.
   cell_start_.assign(cell_count + 1, 0);
@@ -87,7 +87,7 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
     high = (cell + 1).min(cells_ - 1);
   };
   // Pass 1 counts, pass 2 fills: both per particle, hence thread-count independent.
-#pragma omp parallel for schedule(dynamic, 256) if (n >= 1024)
+#pragma omp parallel for schedule(dynamic, 256) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     Eigen::Array3i low, high;
     range(i, low, high);
@@ -100,7 +100,7 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
   for (int i = 0; i < n; ++i) list.offset[i + 1] += list.offset[i];
   list.index.resize(list.offset[n]);
   list.distance.resize(list.offset[n]);
-#pragma omp parallel for schedule(dynamic, 256) if (n >= 1024)
+#pragma omp parallel for schedule(dynamic, 256) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     Eigen::Array3i low, high;
     range(i, low, high);

@@ -8,7 +8,7 @@ std::vector<double> number_density(const std::vector<Eigen::Vector3d>& positions
                                    const NeighbourList& neighbours, double radius) {
   const int n = static_cast<int>(positions.size());
   std::vector<double> result(n, 0.0);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     double sum = 0.0;
     for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {
@@ -24,7 +24,7 @@ std::vector<Eigen::Vector3d> gradient(int dimension, const std::vector<Eigen::Ve
                                       const NeighbourList& neighbours, double radius, double n0) {
   const int n = static_cast<int>(positions.size());
   std::vector<Eigen::Vector3d> result(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {
@@ -42,7 +42,7 @@ std::vector<double> laplacian(int dimension, const std::vector<double>& field,
                               double lambda) {
   const int n = static_cast<int>(field.size());
   std::vector<double> result(n, 0.0);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     double sum = 0.0;
     for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {

@@ -13,7 +13,7 @@ double dot(const std::vector<double>& a, const std::vector<double>& b) {
   const int n = static_cast<int>(a.size());
   const int blocks = (n + kBlock - 1) / kBlock;
   std::vector<double> partial(blocks, 0.0);
-#pragma omp parallel for schedule(static) if (blocks >= 2)
+#pragma omp parallel for schedule(static) if (blocks >= 4)
   for (int block = 0; block < blocks; ++block) {
     const int end = std::min(n, (block + 1) * kBlock);
     double sum = 0.0;
@@ -27,7 +27,7 @@ double dot(const std::vector<double>& a, const std::vector<double>& b) {
 
 void multiply(const SparseRows& m, const std::vector<double>& x, std::vector<double>& y) {
   const int n = m.rows();
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     double sum = 0.0;
     for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) sum += m.value[k] * x[m.column[k]];
@@ -47,7 +47,7 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
     return result;
   }
   std::vector<double> inverse_diagonal(n, 1.0);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
       if (matrix.column[k] == i && matrix.value[k] > 0.0)
@@ -62,7 +62,7 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
   }
   std::vector<double> r(n), z(n), p(n), q(n);
   multiply(matrix, x, q);
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     r[i] = rhs[i] - q[i];
     z[i] = inverse_diagonal[i] * r[i];
@@ -76,7 +76,7 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
     const double pq = dot(p, q);
     if (!(pq > 0.0)) break;  // loss of positive definiteness or breakdown
     const double alpha = rz / pq;
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
     for (int i = 0; i < n; ++i) {
       x[i] += alpha * p[i];
       r[i] -= alpha * q[i];
@@ -85,7 +85,7 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
     const double rz_next = dot(r, z);
     const double beta = rz_next / rz;
     rz = rz_next;
-#pragma omp parallel for schedule(static) if (n >= 1024)
+#pragma omp parallel for schedule(static) if (n >= 4096)
     for (int i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
     residual = std::sqrt(dot(r, r)) / rhs_norm;
     ++iteration;

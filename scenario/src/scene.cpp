@@ -142,6 +142,42 @@ Scene load_scene(const std::filesystem::path& bundle_or_file,
   return parse_scene(load_yaml_file(file), file, &parsers);
 }
 
+Scene load_scene(const YAML::Node& document, const std::filesystem::path& file,
+                 const std::map<std::string, ParticipantParser>& parsers) {
+  return parse_scene(document, file, &parsers);
+}
+
+void apply_override(YAML::Node& document, const std::string& dotted_key, const std::string& value) {
+  std::vector<std::string> keys;
+  std::size_t start = 0;
+  while (true) {
+    const auto dot = dotted_key.find('.', start);
+    keys.push_back(dotted_key.substr(start, dot - start));
+    if (dot == std::string::npos) break;
+    start = dot + 1;
+  }
+  for (const auto& key : keys) {
+    if (key.empty()) throw ScenarioError("override '" + dotted_key + "': empty key");
+  }
+  YAML::Node parsed;
+  try {
+    parsed = YAML::Load(value);
+  } catch (const YAML::Exception& error) {
+    throw ScenarioError("override '" + dotted_key + "=" + value + "': " + error.msg);
+  }
+  // yaml-cpp nodes are handles: walk down by reassigning through a chain of copies.
+  std::vector<YAML::Node> chain{document};
+  for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
+    YAML::Node next = chain.back()[keys[i]];
+    if (next && !next.IsMap()) {
+      throw ScenarioError("override '" + dotted_key + "': '" + keys[i] + "' is not a mapping");
+    }
+    if (!next) chain.back()[keys[i]] = YAML::Node(YAML::NodeType::Map);
+    chain.push_back(chain.back()[keys[i]]);
+  }
+  chain.back()[keys.back()] = parsed;
+}
+
 Scene load_resolved_scene(const std::filesystem::path& file) {
   return parse_scene(load_yaml_file(file), file, nullptr);
 }

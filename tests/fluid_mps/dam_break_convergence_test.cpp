@@ -14,7 +14,7 @@ TEST(MpsDamBreak, MartinMoyceResolutionSweep) {
   std::vector<DamBreakResult> results;
   const std::vector<int> resolutions{10, 15, 20};
   for (int cells : resolutions) results.push_back(run_dam_break(cells, 0.35, reference));
-  std::cout << "a/l0  particles  steps  wall[s]  front_rms[%]  height_rms[%]\n";
+  std::cout << "a/l0  particles  steps  wall[s]   cpu[s]  front_rms[%]  height_rms[%]\n";
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
     std::cout << std::setw(4) << resolutions[k] << std::setw(11) << r.particles << std::setw(7)

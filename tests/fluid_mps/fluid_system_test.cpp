@@ -181,9 +181,9 @@ TEST(MpsFluidSystem, RestartFromFileContinuesBitForBit) {
 
 // Parallel loops gather per particle and reduce in fixed blocks: thread count must not matter.
 TEST(MpsFluidSystem, SameBitsWithOneAndTwoThreads) {
-  MpsParameters p = dam_parameters(25);  // > 1024 particles, so the loops do run in parallel
+  MpsParameters p = dam_parameters(40);  // > 4096 particles, so the loops do run in parallel
   const ParticleSet set = dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715);
-  ASSERT_GT(set.size(), 2048u);
+  ASSERT_GT(set.size(), 4096u);
   const int threads = omp_get_max_threads();
   FluidSystem one(p, set), two(p, set);
   omp_set_num_threads(1);

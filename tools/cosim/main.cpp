@@ -7,15 +7,11 @@
 #include "network.hpp"
 #include "replay_command.hpp"
 #include "runner.hpp"
+#include "sweep.hpp"
 
 namespace {
 
 using namespace cosim;
-
-// Checked before the network, so a bad scenario is reported before anything starts.
-scenario::Scene load_checked(const std::filesystem::path& bundle) {
-  return scenario::load_scene(bundle, tool::participant_parsers());
-}
 
 std::map<std::string, std::string> parse_faults(const std::vector<std::string>& faults) {
   std::map<std::string, std::string> parsed;
@@ -48,6 +44,12 @@ int main(int argc, char** argv) {
   tool::RunRequest request;
   std::vector<std::string> faults;
   std::string network = "auto";
+  std::vector<std::string> overrides;
+  auto add_overrides = [&](CLI::App* command) {
+    command->add_option("--set", overrides,
+                        "override a scenario value: KEY=VALUE, e.g. "
+                        "participants.fluid_mps.particle_spacing=0.004");
+  };
   bool quiet = false;
   auto add_run_options = [&](CLI::App* command) {
     command->add_option("--runs-dir", request.runs_dir, "where run folders are made")
@@ -70,9 +72,21 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "run a scenario bundle");
   run->add_option("bundle", bundle, "scenario folder (or its scenario.yaml)")->required();
   add_run_options(run);
+  add_overrides(run);
 
   auto* validate = app.add_subcommand("validate", "check a scenario bundle without running it");
   validate->add_option("bundle", bundle, "scenario folder (or its scenario.yaml)")->required();
+  add_overrides(validate);
+
+  tool::SweepRequest sweep;
+  auto* sweep_command = app.add_subcommand(
+      "sweep",
+      "run a scene for several values of one parameter; tabulate metrics against run time");
+  sweep_command->add_option("bundle", sweep.bundle, "scenario folder")->required();
+  sweep_command->add_option("--vary", sweep.vary, "dotted key to vary")->required();
+  sweep_command->add_option("--values", sweep.values, "its values, one run each")->required();
+  add_run_options(sweep_command);
+  add_overrides(sweep_command);
 
   tool::ReplayRequest replay;
   auto* replay_command = app.add_subcommand(
@@ -89,17 +103,24 @@ int main(int argc, char** argv) {
     request.faults = parse_faults(faults);
     request.show_progress = !quiet;
     if (validate->parsed()) {
-      const auto scene = load_checked(bundle);
+      const auto scene = tool::load_with_overrides(bundle, overrides);
       fmt::print("{}: valid ({} participants, {} windows of {} s)\n", scene.file.string(),
                  scene.participants.size(), scene.total_windows(), scene.coupling.window);
       return 0;
     }
     if (run->parsed()) {
-      const auto scene = load_checked(bundle);
+      // Checked before the network, so a bad scenario is reported before anything starts.
+      const auto scene = tool::load_with_overrides(bundle, overrides);
       if (!ensure_network(network, argc, argv)) return 2;
       const auto outcome = tool::run_scene(scene, request);
       tool::print_report(outcome.run_dir);
       return outcome.exit_code;
+    }
+    if (sweep_command->parsed()) {
+      sweep.overrides = overrides;
+      sweep.run = request;
+      if (!ensure_network(network, argc, argv)) return 2;
+      return tool::sweep(sweep);
     }
     if (replay_command->parsed()) {
       if (!ensure_network(network, argc, argv)) return 2;

@@ -62,6 +62,15 @@ const std::map<std::string, Role>& participant_roles();
 Scene load_scene(const std::filesystem::path& bundle_or_file,
                  const std::map<std::string, ParticipantParser>& parsers);
 
+// The same for a document already in memory (e.g. with command-line overrides applied); `file`
+// names it in messages and resolves relative file names.
+Scene load_scene(const YAML::Node& document, const std::filesystem::path& file,
+                 const std::map<std::string, ParticipantParser>& parsers);
+
+// Sets `dotted.key.path` of a scenario document to a YAML value given as text ("0.004",
+// "[1, 0, 0]", "true"), creating missing mappings.
+void apply_override(YAML::Node& document, const std::string& dotted_key, const std::string& value);
+
 // Reads a resolved scenario written by a run, which was checked when the run started; the
 // participant sections are left to each process's own parser.
 Scene load_resolved_scene(const std::filesystem::path& file);

@@ -1,0 +1,115 @@
+#include "sweep.hpp"
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace cosim::tool {
+
+namespace {
+
+std::filesystem::path scenario_file_of(const std::filesystem::path& bundle) {
+  return std::filesystem::is_directory(bundle) ? bundle / "scenario.yaml" : bundle;
+}
+
+void apply_all(YAML::Node& document, const std::vector<std::string>& overrides) {
+  for (const auto& item : overrides) {
+    const auto equals = item.find('=');
+    if (equals == std::string::npos) {
+      throw scenario::ScenarioError("--set expects KEY=VALUE, got '" + item + "'");
+    }
+    scenario::apply_override(document, item.substr(0, equals), item.substr(equals + 1));
+  }
+}
+
+}  // namespace
+
+scenario::Scene load_with_overrides(const std::filesystem::path& bundle,
+                                    const std::vector<std::string>& overrides) {
+  const auto file = scenario_file_of(bundle);
+  YAML::Node document = scenario::load_yaml_file(file);
+  apply_all(document, overrides);
+  return scenario::load_scene(document, file, participant_parsers());
+}
+
+int sweep(const SweepRequest& request) {
+  const auto file = scenario_file_of(request.bundle);
+  const YAML::Node original = scenario::load_yaml_file(file);
+  // Check every variant before running any.
+  std::vector<scenario::Scene> scenes;
+  for (const auto& value : request.values) {
+    YAML::Node document = YAML::Clone(original);
+    apply_all(document, request.overrides);
+    scenario::apply_override(document, request.vary, value);
+    scenes.push_back(scenario::load_scene(document, file, participant_parsers()));
+  }
+  struct Row {
+    std::string value;
+    bool ok = false;
+    double wall = 0;
+    std::vector<std::pair<std::string, nlohmann::json>> metrics;
+    std::filesystem::path run_dir;
+  };
+  std::vector<Row> rows;
+  int exit_code = 0;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    fmt::print("sweep {}/{}: {} = {}\n", i + 1, scenes.size(), request.vary, request.values[i]);
+    RunRequest run = request.run;
+    run.run_label = fmt::format("sweep{}", i + 1);
+    const auto outcome = run_scene(scenes[i], run);
+    Row row{request.values[i], outcome.result.ok, outcome.result.wall_seconds, {}, outcome.run_dir};
+    std::ifstream in(outcome.run_dir / "summary.json");
+    const auto summary = nlohmann::json::parse(in);
+    for (const auto& participant : summary["participants"]) {
+      const auto& report = participant["report"];
+      if (!report.contains("metrics")) continue;
+      for (const auto& [name, metric] : report["metrics"].items()) {
+        row.metrics.emplace_back(participant["name"].get<std::string>() + "." + name, metric);
+      }
+    }
+    if (!outcome.result.ok) {
+      exit_code = 1;
+      fmt::print("  failed: {}\n", outcome.result.failure);
+    }
+    rows.push_back(std::move(row));
+  }
+
+  // Table and CSV: one line per run and metric.
+  const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::filesystem::create_directories(request.run.runs_dir);
+  const auto csv_path = std::filesystem::absolute(
+      request.run.runs_dir /
+      fmt::format("{}-sweep-{:%Y%m%d-%H%M%S}.csv", scenes.front().name, fmt::localtime(now)));
+  std::ofstream csv(csv_path);
+  csv << request.vary << ",ok,wall_seconds,metric,value,unit,reference,relative_error,run_dir\n";
+  fmt::print("\n{:<14} {:>9}  {:<44} {:>12} {:>12} {:>9}\n",
+             request.vary.substr(request.vary.rfind('.') + 1), "wall [s]", "metric", "value",
+             "reference", "error %");
+  for (const auto& row : rows) {
+    if (row.metrics.empty()) {
+      fmt::print("{:<14} {:>9.2f}  {}\n", row.value, row.wall, row.ok ? "(no metrics)" : "FAILED");
+      csv << fmt::format("{},{},{},,,,,,{}\n", row.value, row.ok, row.wall, row.run_dir.string());
+    }
+    for (const auto& [name, metric] : row.metrics) {
+      const double value = metric["value"].get<double>();
+      const bool has_reference = metric.contains("reference");
+      const bool has_error = metric.contains("relative_error");
+      const std::string reference =
+          has_reference ? fmt::format("{:.6g}", metric["reference"].get<double>()) : "";
+      const std::string error =
+          has_error ? fmt::format("{:.3f}", 100 * metric["relative_error"].get<double>()) : "";
+      fmt::print("{:<14} {:>9.2f}  {:<44} {:>12.6g} {:>12} {:>9}\n", row.value, row.wall, name,
+                 value, reference, error);
+      csv << fmt::format("{},{},{},{},{},{},{},{},{}\n", row.value, row.ok, row.wall, name, value,
+                         metric.value("unit", ""), reference,
+                         has_error ? fmt::format("{}", metric["relative_error"].get<double>()) : "",
+                         row.run_dir.string());
+    }
+  }
+  fmt::print("\ntable written to {}\n", csv_path.string());
+  return exit_code;
+}
+
+}  // namespace cosim::tool
