@@ -19,9 +19,12 @@ Eigen::Vector3d any_unit_normal_to(const Eigen::Vector3d& n) {
 
 ContactGeometry sphere_sphere(const Eigen::Vector3d& center_a, double radius_a, double radius_b) {
   ContactGeometry g;
-  const double distance = center_a.norm();
-  // Eq. (13): contact while the center distance is at most the sum of the radii.
-  if (distance > radius_a + radius_b) return g;
+  // Eq. (13): contact while the center distance is at most the sum of the radii (squared test
+  // first: most candidates are apart).
+  const double reach = radius_a + radius_b;
+  const double distance_squared = center_a.squaredNorm();
+  if (distance_squared > reach * reach) return g;
+  const double distance = std::sqrt(distance_squared);
   g.touching = true;
   g.feature = ContactFeature::kSphereSphere;
   g.overlap = radius_a + radius_b - distance;

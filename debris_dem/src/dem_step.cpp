@@ -39,6 +39,7 @@ ContactGeometry pair_geometry(const DemWorld& world, const ContactPair& p) {
 }
 
 void release(ContactPair& p) {
+  if (!p.touching) return;  // most candidates stay apart: avoid rewriting them every step
   p.touching = false;
   p.tangential_spring.setZero();
   p.force_on_a.setZero();
@@ -68,18 +69,14 @@ void evaluate(const DemWorld& world, ContactPair& p, const ContactGeometry& g, d
 void DemWorld::update_list_if_needed(double dt) {
   time_since_list_ += dt;
   bool rebuild = !list_valid_ || time_since_list_ >= parameters_.list_reset_interval;
-  if (!rebuild && parameters_.list_sweep_guard && !list_positions_.empty()) {
+  if (!rebuild && parameters_.list_sweep_guard) {
     // Seed 004 rebuilds at a fixed interval t_reset and relies on the margin; the list is also
-    // rebuilt as soon as two elements could have closed the margin: a translation plus, for a
-    // log, its end sweeping half_length * rotation angle (|omega| L / 2 per unit time).
+    // rebuilt as soon as two elements could have closed the margin. Each element's sweep (path
+    // of its center plus, for a log, |omega| L / 2 of its ends) is summed in integrate().
     double largest = 0.0;
     double second = 0.0;
     for (const int i : moving_) {
-      const Element& e = elements_[i];
-      double sweep = (position(i) - list_positions_[i]).norm();
-      if (e.kind == ElementKind::kCylinder) {
-        sweep += e.half_length * e.orientation.angularDistance(list_orientations_[i]);
-      }
+      const double sweep = elements_[i].sweep;
       if (sweep > largest) {
         second = largest;
         largest = sweep;
@@ -99,12 +96,7 @@ void DemWorld::update_list_if_needed(double dt) {
   pairs_.swap(pairs);
   triangle_pairs_.swap(triangle_pairs);
   triangle_group_start_.swap(group_start);
-  list_positions_.resize(elements_.size());
-  list_orientations_.resize(elements_.size());
-  for (int i = 0; i < element_count(); ++i) {
-    list_positions_[i] = position(i);
-    list_orientations_[i] = elements_[i].orientation;
-  }
+  for (auto& e : elements_) e.sweep = 0.0;
   time_since_list_ = 0.0;
   list_valid_ = true;
   ++list_rebuilds_;
@@ -152,7 +144,8 @@ void DemWorld::compute_forces(double dt) {
     });
     const bool is_sphere = triangle_pairs_[begin].kind == PairKind::kSphereTriangle;
     const double tolerance = 1e-6 * elements_[triangle_pairs_[begin].a].radius;
-    std::vector<bool> accepted(end - begin, false);
+    thread_local std::vector<char> accepted;
+    accepted.assign(end - begin, 0);
     for (std::size_t oi = 0; oi < order.size(); ++oi) {
       const ContactGeometry& gj = geometry[order[oi]];
       const Eigen::Vector3d qj = gj.point + 0.5 * gj.overlap * gj.normal;
@@ -261,6 +254,7 @@ void DemWorld::integrate(double dt) {
       e.angular_velocity = r * (r.transpose() * e.angular_momentum).cwiseQuotient(e.inertia_body);
     }
     const double angle = e.angular_velocity.norm() * dt;
+    e.sweep += e.velocity.norm() * dt + e.half_length * angle;
     if (angle > 0.0) {
       const Eigen::Quaterniond turn(Eigen::AngleAxisd(angle, e.angular_velocity.normalized()));
       e.orientation = (turn * e.orientation).normalized();
@@ -280,8 +274,8 @@ void DemWorld::check_stability() const {
     } else if (!e.angular_momentum.allFinite()) {
       quantity = "angular momentum";
     }
-    std::ostringstream message;
     if (quantity != nullptr) {
+      std::ostringstream message;
       message << "DEM element " << i << ": " << quantity << " is not finite at t = " << time_
               << " s";
       throw StabilityError(message.str());
@@ -289,6 +283,7 @@ void DemWorld::check_stability() const {
     const Eigen::Vector3d p = position(i);
     if ((p.array() < parameters_.domain_min.array()).any() ||
         (p.array() > parameters_.domain_max.array()).any()) {
+      std::ostringstream message;
       message << "DEM element " << i << ": position (" << p.transpose()
               << ") left the domain bounding box at t = " << time_ << " s";
       throw StabilityError(message.str());

@@ -334,7 +334,9 @@ StepReport FluidSystem::step(double dt) {
             : scale * (p.pressure_relaxation * (density_now[i] - n0_n) / n0_n - dt * divergence[i]);
     solution[row] = pressures_[i];  // warm start from the previous step
   }
-  const PcgResult pcg = solve_pcg(matrix, rhs, solution, p.pcg_tolerance, p.pcg_max_iterations);
+  const PcgResult pcg = solve_pcg(
+      matrix, rhs, solution, p.pcg_tolerance, p.pcg_max_iterations,
+      p.pcg_incomplete_cholesky ? Preconditioner::incomplete_cholesky : Preconditioner::jacobi);
   report.pcg_iterations = pcg.iterations;
   report.pcg_residual = pcg.relative_residual;
   report.pcg_converged = pcg.converged;

@@ -1,5 +1,7 @@
 #include "cosim/fluid_mps/pressure_solver.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 
@@ -35,13 +37,47 @@ void multiply(const SparseRows& m, const std::vector<double>& x, std::vector<dou
   }
 }
 
+PcgResult solve_incomplete_cholesky(const SparseRows& matrix, const std::vector<double>& rhs,
+                                    std::vector<double>& x, double tolerance, int max_iterations) {
+  const int n = matrix.rows();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(matrix.column.size());
+  for (int i = 0; i < n; ++i) {
+    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
+      if (matrix.value[k] != 0.0) entries.emplace_back(i, matrix.column[k], matrix.value[k]);
+    }
+  }
+  Eigen::SparseMatrix<double> a(n, n);
+  a.setFromTriplets(entries.begin(), entries.end());
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                           Eigen::IncompleteCholesky<double>>
+      cg;
+  cg.setTolerance(tolerance);
+  cg.setMaxIterations(max_iterations);
+  cg.compute(a);
+  PcgResult result;
+  if (cg.info() != Eigen::Success) return result;
+  const Eigen::Map<const Eigen::VectorXd> b(rhs.data(), n);
+  Eigen::Map<Eigen::VectorXd> guess(x.data(), n);
+  const Eigen::VectorXd solution = cg.solveWithGuess(b, Eigen::VectorXd(guess));
+  guess = solution;
+  result.iterations = static_cast<int>(cg.iterations());
+  result.relative_residual = cg.error();
+  result.converged = cg.info() == Eigen::Success;
+  return result;
+}
+
 }  // namespace
 
 PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
-                    std::vector<double>& x, double tolerance, int max_iterations) {
+                    std::vector<double>& x, double tolerance, int max_iterations,
+                    Preconditioner preconditioner) {
   const int n = matrix.rows();
-  PcgResult result;
   x.resize(n, 0.0);
+  if (preconditioner == Preconditioner::incomplete_cholesky && n > 0) {
+    return solve_incomplete_cholesky(matrix, rhs, x, tolerance, max_iterations);
+  }
+  PcgResult result;
   if (n == 0) {
     result.converged = true;
     return result;

@@ -167,15 +167,36 @@ void apply_override(YAML::Node& document, const std::string& dotted_key, const s
   }
   // yaml-cpp nodes are handles: walk down by reassigning through a chain of copies.
   std::vector<YAML::Node> chain{document};
+  // A numeric key indexes a list: participants.vegetation_beam.plants.0.links
+  auto list_index = [&](const YAML::Node& node, const std::string& key) -> int {
+    if (!node.IsSequence()) return -1;
+    if (key.find_first_not_of("0123456789") != std::string::npos) {
+      throw ScenarioError("override '" + dotted_key + "': '" + key + "' must index a list");
+    }
+    const int index = std::stoi(key);
+    if (index >= static_cast<int>(node.size())) {
+      throw ScenarioError("override '" + dotted_key + "': the list has " +
+                          std::to_string(node.size()) + " entries");
+    }
+    return index;
+  };
   for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
+    if (const int index = list_index(chain.back(), keys[i]); index >= 0) {
+      chain.push_back(chain.back()[index]);
+      continue;
+    }
     YAML::Node next = chain.back()[keys[i]];
-    if (next && !next.IsMap()) {
+    if (next && !next.IsMap() && !next.IsSequence()) {
       throw ScenarioError("override '" + dotted_key + "': '" + keys[i] + "' is not a mapping");
     }
     if (!next) chain.back()[keys[i]] = YAML::Node(YAML::NodeType::Map);
     chain.push_back(chain.back()[keys[i]]);
   }
-  chain.back()[keys.back()] = parsed;
+  if (const int index = list_index(chain.back(), keys.back()); index >= 0) {
+    chain.back()[index] = parsed;
+  } else {
+    chain.back()[keys.back()] = parsed;
+  }
 }
 
 Scene load_resolved_scene(const std::filesystem::path& file) {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "cosim/debris_dem/dem_world.hpp"
@@ -60,6 +61,9 @@ TEST(ContactDynamics, HeadOnRestitutionMatchesDampingRatioFormula) {
     // Default convention (no tension, seed 004 fig. 3a): the contact ends when the total force
     // reaches zero, earlier than the closed form, and the rebound is faster.
     const HeadOn clipped = head_on(m, true);
+    std::printf("e %.3f: measured %.4f (t_c %.3e s, closed form %.3e s); clipped %.4f (t_c %.3e)\n",
+                e, free.restitution, free.contact_time, std::numbers::pi / omega_d,
+                clipped.restitution, clipped.contact_time);
     EXPECT_GE(clipped.restitution, e);
     EXPECT_LE(clipped.contact_time, free.contact_time);
   }
@@ -99,6 +103,9 @@ TEST(ContactDynamics, ObliqueImpactSlidingMatchesChungOoi) {
     const double expected_et = 1 - m.friction * (1 + e) / std::tan(theta);
     EXPECT_NEAR(world.velocity(s).x() / vt, expected_et, 0.01) << theta_degrees;
     const double expected_spin = 5 * m.friction * (1 + e) * vn / (2 * r);
+    std::printf("theta %.0f: e_n %.4f, e_t %.4f (analytic %.4f), spin %.1f (analytic %.1f) rad/s\n",
+                theta_degrees, e, world.velocity(s).x() / vt, expected_et,
+                world.angular_velocity(s).y(), expected_spin);
     EXPECT_NEAR(world.angular_velocity(s).y(), expected_spin, 0.02 * expected_spin)
         << theta_degrees;
     EXPECT_NEAR(world.angular_velocity(s).x(), 0.0, 1e-9);
@@ -174,12 +181,16 @@ TEST(ContactDynamics, SphereOnInclineRollsOrSlidesAtTanAlphaVersus3p5Mu) {
   const double rolling_alpha = 25.0 * std::numbers::pi / 180;
   const InclineResult rolling = incline(25.0, mu, false);
   const double a_roll = 5.0 / 7.0 * g * std::sin(rolling_alpha);
+  std::printf("sphere rolling: a %.4f (analytic %.4f) m/s^2\n", rolling.acceleration, a_roll);
   EXPECT_NEAR(rolling.acceleration, a_roll, 0.01 * a_roll);
   EXPECT_NEAR(rolling.angular_acceleration * 0.01, rolling.acceleration, 0.01 * a_roll);
 
   const double sliding_alpha = 45.0 * std::numbers::pi / 180;
   const InclineResult sliding = incline(45.0, mu, false);
   const double a_slide = g * (std::sin(sliding_alpha) - mu * std::cos(sliding_alpha));
+  std::printf("sphere sliding: a %.4f (analytic %.4f), spin-up %.1f (analytic %.1f) rad/s^2\n",
+              sliding.acceleration, a_slide, sliding.angular_acceleration,
+              5 * mu * g * std::cos(sliding_alpha) / (2 * 0.01));
   EXPECT_NEAR(sliding.acceleration, a_slide, 0.01 * a_slide);
   // Friction mu m g cos(alpha) at lever R spins it up at 5 mu g cos(alpha) / (2 R).
   const double spin = 5 * mu * g * std::cos(sliding_alpha) / (2 * 0.01);
@@ -191,9 +202,11 @@ TEST(ContactDynamics, CylinderRollsOnInclineWithTwoThirdsGSinAlpha) {
   const double alpha = 20.0 * std::numbers::pi / 180;
   const InclineResult rolling = incline(20.0, 0.3, true);
   const double expected = 2.0 / 3.0 * 9.81 * std::sin(alpha);
+  std::printf("cylinder rolling: a %.4f (analytic %.4f) m/s^2\n", rolling.acceleration, expected);
   EXPECT_NEAR(rolling.acceleration, expected, 0.02 * expected);
   const InclineResult sliding = incline(45.0, 0.2, true);
   const double a_slide = 9.81 * (std::sin(M_PI / 4) - 0.2 * std::cos(M_PI / 4));
+  std::printf("cylinder sliding: a %.4f (analytic %.4f) m/s^2\n", sliding.acceleration, a_slide);
   EXPECT_NEAR(sliding.acceleration, a_slide, 0.02 * a_slide);
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -74,10 +75,12 @@ inline MpsParameters dam_break_parameters(double l0) {
 }
 
 inline DamBreakResult run_dam_break(int cells_per_width, double end_time,
-                                    const std::string& reference_path) {
+                                    const std::string& reference_path,
+                                    const std::function<void(MpsParameters&)>& tune = {}) {
   const double a = 0.05715, g = 9.81;
   const double l0 = a / cells_per_width;
   MpsParameters p = dam_break_parameters(l0);
+  if (tune) tune(p);
   ParticleSet particles = dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a);
   FluidSystem system(p, std::move(particles));
   std::vector<double> times{0.0}, fronts{surge_front_position(system)},

@@ -187,9 +187,9 @@ TEST(MpsFluidSystem, SameBitsWithOneAndTwoThreads) {
   const int threads = omp_get_max_threads();
   FluidSystem one(p, set), two(p, set);
   omp_set_num_threads(1);
-  for (int k = 0; k < 30; ++k) one.step(2e-4);
+  for (int k = 0; k < 10; ++k) one.step(2e-4);
   omp_set_num_threads(2);
-  for (int k = 0; k < 30; ++k) two.step(2e-4);
+  for (int k = 0; k < 10; ++k) two.step(2e-4);
   omp_set_num_threads(threads);
   EXPECT_TRUE(same_bits(one, two));
 }

@@ -2,6 +2,7 @@
 // run begins (the process parses the same section again with the same code).
 #include "cosim/prescribed_flow/config.hpp"
 #include "cosim/replay/config.hpp"
+#include "dem_config.hpp"
 #include "fluid_config.hpp"
 #include "runner.hpp"
 #include "vegetation_config.hpp"
@@ -14,6 +15,10 @@ const std::map<std::string, scenario::ParticipantParser>& participant_parsers() 
                              const scenario::Scene&) { prescribed_flow::parse_settings(section); }},
       {"replay",
        [](scenario::Section& section, const scenario::Scene&) { replay::parse_settings(section); }},
+      {"debris_dem",
+       [](scenario::Section& section, const scenario::Scene& scene) {
+         dem::parse_config(section, scene.output_interval);
+       }},
       {"fluid_mps",
        [](scenario::Section& section, const scenario::Scene& scene) {
          mps::parse_config(section, scene.output_interval);

@@ -58,8 +58,10 @@ VegetationConfig parse_config(scenario::Section& section, double scene_output_in
   parameters.contact_stiffness =
       section.number("contact_stiffness", parameters.contact_stiffness, Range::non_negative());
   parameters.rigid = section.flag("rigid", parameters.rigid);
+  // The Newmark average-acceleration scheme is unconditionally stable: factors above 1 trade
+  // axial-strain accuracy for speed (seed 000: 10 to 100 beam steps per fluid step suffice).
   parameters.safety_factor =
-      section.number("safety_factor", parameters.safety_factor, Range{0.0, 1.0, true});
+      section.number("safety_factor", parameters.safety_factor, Range{0.0, 1000.0, true});
   parameters.max_substeps =
       section.integer("max_substeps", parameters.max_substeps, Range::between(1, 100000000));
 

@@ -377,10 +377,13 @@ int PlantField::substep(double dt, const std::vector<Eigen::Vector3d>& ambient) 
       accelerations_[plant.first].setZero();
       velocities_[plant.first].setZero();
     }
-    if (contact) compute_contact_forces(positions_, velocities_, iteration == 1);
+    if (contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
     bool all_converged = true;
     for (int p = 0; p < plant_count(); ++p) {
       if (converged[p] && !plant_in_contact_[p]) continue;
+      // Gauss-Seidel across plants: contact forces see the partners already corrected in this
+      // iteration, which halves the iterations of densely touching plants against Jacobi.
+      if (contact && iteration > 1 && plant_in_contact_[p]) refresh_contact_forces(p, dt);
       const Plant& plant = plants_[p];
       // Modified Newton: the Jacobian of the first iteration is kept for the sub-step (later
       // iterations mostly resolve plant-to-plant contact, which it treats per node anyway).

@@ -81,7 +81,11 @@ void PlantField::compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
   }
   contact_touched_nodes_.clear();
   std::fill(plant_in_contact_.begin(), plant_in_contact_.end(), 0);
-  if (decide_active_pairs) contact_active_.assign(contact_candidates_.size(), 0);
+  if (decide_active_pairs) {
+    contact_active_.assign(contact_candidates_.size(), 0);
+    plant_contact_pairs_.resize(plants_.size());
+    for (auto& pairs : plant_contact_pairs_) pairs.clear();
+  }
   for (std::size_t pair = 0; pair < contact_candidates_.size(); ++pair) {
     const auto [a, b] = contact_candidates_[pair];
     const Eigen::Vector3d r = x[a] - x[b];
@@ -91,6 +95,10 @@ void PlantField::compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
     // switch inside the Newton loop makes it cycle between the two sides of the contact edge.
     if (decide_active_pairs) contact_active_[pair] = distance < reach && distance > 0;
     if (!contact_active_[pair] || distance == 0) continue;
+    if (decide_active_pairs) {
+      plant_contact_pairs_[node_plant_[a]].push_back(static_cast<int>(pair));
+      plant_contact_pairs_[node_plant_[b]].push_back(static_cast<int>(pair));
+    }
     // Normal spring-dashpot of eq. 18-21; the tangential (friction) part of the seed is left
     // out.
     const Eigen::Vector3d e = r / distance;
@@ -105,6 +113,34 @@ void PlantField::compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
       contact_touched_nodes_.push_back(node);
       plant_in_contact_[node_plant_[node]] = 1;
     }
+  }
+}
+
+void PlantField::refresh_contact_forces(int plant_index, double dt) {
+  const Plant& plant = plants_[plant_index];
+  for (int i = 1; i <= plant.links; ++i) contact_forces_[plant.first + i].setZero();
+  // Velocity from the current trial position by the Newmark relations (eq. 22-23).
+  const auto velocity = [&](int k) -> Eigen::Vector3d {
+    if (plants_[node_plant_[k]].first == k) return Eigen::Vector3d::Zero();  // clamped base
+    constexpr double beta = 0.25, gamma = 0.5;
+    const Eigen::Vector3d acceleration =
+        (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) / (beta * dt * dt) -
+        (0.5 / beta - 1.0) * previous_accelerations_[k];
+    return previous_velocities_[k] +
+           dt * ((1 - gamma) * previous_accelerations_[k] + gamma * acceleration);
+  };
+  for (int pair : plant_contact_pairs_[plant_index]) {
+    const auto [a, b] = contact_candidates_[pair];
+    const Eigen::Vector3d r = positions_[a] - positions_[b];
+    const double distance = r.norm();
+    if (distance == 0) continue;
+    const Eigen::Vector3d e = r / distance;
+    const double approach = (velocity(a) - velocity(b)).dot(e);
+    const double normal =
+        contact_stiffness_ * (contact_radius_[a] + contact_radius_[b] - distance) -
+        contact_damping_ * approach;
+    if (node_plant_[a] == plant_index && a != plant.first) contact_forces_[a] += normal * e;
+    if (node_plant_[b] == plant_index && b != plant.first) contact_forces_[b] -= normal * e;
   }
 }
 

@@ -157,6 +157,7 @@ class DemWorld {
     double inverse_mass = 0.0;
     Eigen::Vector3d inertia_body = Eigen::Vector3d::Zero();  // principal, body z = axis
     double bounding_radius = 0.0;
+    double sweep = 0.0;  // bound on surface-point travel since the last list build
     int material = 0;
     // Triangle geometry relative to vertex a (the anchor).
     Eigen::Vector3d edge1 = Eigen::Vector3d::Zero();
@@ -192,8 +193,6 @@ class DemWorld {
   std::vector<ContactPair> pairs_;
   std::vector<ContactPair> triangle_pairs_;  // grouped by moving element
   std::vector<int> triangle_group_start_;
-  std::vector<Eigen::Vector3d> list_positions_;  // world positions at the last list build
-  std::vector<Eigen::Quaterniond> list_orientations_;
   double time_ = 0.0;
   double time_since_list_ = 0.0;
   double window_max_overlap_ = 0.0;

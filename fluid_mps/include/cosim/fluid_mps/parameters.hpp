@@ -32,6 +32,7 @@ struct MpsParameters {
   double max_dt = 1e-3;           // user upper bound [s]
   double pcg_tolerance = 1e-8;    // relative residual |b - A p| / |b|
   int pcg_max_iterations = 2000;
+  bool pcg_incomplete_cholesky = false;  // false: Jacobi (parallel); true: IC(0) (serial)
   // Ikeda-type artificial compressibility [1/Pa]: keeps the Poisson matrix strictly positive
   // definite when a cluster of particles has no free-surface neighbour.
   double compressibility = 0.45e-9;
@@ -49,6 +50,17 @@ struct MpsParameters {
   // by 20 l0 on each side.
   Eigen::AlignedBox3d domain;
 };
+
+// Seed 001's tuned set for its fishway (Run-PF-6): d_cr = 1.0, C_c = -0.8 and a gradient radius
+// of 8.0 l0. Walls then need at least 8 layers of pressure-carrying particles.
+inline MpsParameters seed001_fishway_parameters(double particle_spacing) {
+  MpsParameters p;
+  p.particle_spacing = particle_spacing;
+  p.collision_distance_ratio = 1.0;
+  p.collision_restitution = -0.8;
+  p.radius_gradient_over_l0 = 8.0;
+  return p;
+}
 
 enum class ParticleKind { fluid, wall, dummy };
 

@@ -135,6 +135,9 @@ class PlantField {
   void update_contact_candidates();
   void compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
                               const std::vector<Eigen::Vector3d>& v, bool decide_active_pairs);
+  // Recomputes the contact forces on one plant's nodes from its active pairs at the current
+  // trial positions (Gauss-Seidel update inside the Newton loop of a sub-step of length dt).
+  void refresh_contact_forces(int plant, double dt);
   // Sum of forces on the plant's nodes into `force` (base entry unused) and the drag part into
   // `drag` (base included). With a Jacobian: adds stiffness_weight * K + damping_weight * C
   // over the free nodes (local node i-1 for global node first+i).
@@ -164,7 +167,8 @@ class PlantField {
   std::vector<BandedMatrix> jacobians_;  // per plant, factorised at a sub-step's first iteration
   // Contact: candidate node pairs within reach plus a margin, rebuilt when nodes moved.
   std::vector<std::pair<int, int>> contact_candidates_;
-  std::vector<char> contact_active_;  // per candidate, fixed during a sub-step
+  std::vector<char> contact_active_;                   // per candidate, fixed during a sub-step
+  std::vector<std::vector<int>> plant_contact_pairs_;  // active candidate indices per plant
   std::vector<Eigen::Vector3d> candidate_positions_;
   std::vector<Eigen::Vector3d> contact_forces_;
   std::vector<Eigen::Matrix3d> contact_stiffness_blocks_, contact_damping_blocks_;
