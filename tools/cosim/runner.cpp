@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include <stdlib.h>
+
 #include "cosim/coupler/bus.hpp"
 #include "cosim/coupler/process_main.hpp"
 
@@ -86,6 +88,9 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
 
   coupler::ProcessGroup processes;
   const auto bin = coupler::executable_dir();
+  // Solvers share the machine with each other: OpenMP threads that spin while waiting would
+  // steal the cores their partners compute on (docs/performance.md, fluid_mps).
+  setenv("OMP_WAIT_POLICY", "passive", 0);
   for (const auto& entry : scene.participants) {
     const auto executable = bin / entry.executable;
     if (!std::filesystem::exists(executable)) {
