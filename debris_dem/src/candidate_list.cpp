@@ -66,6 +66,8 @@ void build_candidate_pairs(const DemWorld& world, double margin, std::vector<Con
                            std::vector<int>& group_start) {
   const auto& elements = world.elements();
   const int n = static_cast<int>(elements.size());
+  const int threads = std::max(1, world.parameters().threads);
+  const bool parallel = threads > 1 && n > 4096;
   std::vector<int> spheres;
   std::vector<int> cylinders;
   std::vector<int> triangles;
@@ -117,7 +119,7 @@ void build_candidate_pairs(const DemWorld& world, double margin, std::vector<Con
     grid[cell_key(sphere_cell[i].x(), sphere_cell[i].y(), sphere_cell[i].z())].push_back(i);
   }
   std::vector<ContactPair> found;
-#pragma omp parallel if (n > 4096)
+#pragma omp parallel if (parallel) num_threads(threads)
   {
     std::vector<ContactPair> local;
 #pragma omp for schedule(dynamic, 256) nowait
@@ -160,7 +162,7 @@ void build_candidate_pairs(const DemWorld& world, double margin, std::vector<Con
   triangle_pairs.clear();
   group_start.clear();
   std::vector<std::vector<ContactPair>> per_element(n);
-#pragma omp parallel for schedule(dynamic, 64) if (n > 4096)
+#pragma omp parallel for schedule(dynamic, 64) if (parallel) num_threads(threads)
   for (int i = 0; i < n; ++i) {
     const Element& e = elements[i];
     if (!e.enabled || e.fixed || e.kind == ElementKind::kTriangle) continue;

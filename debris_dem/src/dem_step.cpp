@@ -104,6 +104,7 @@ void DemWorld::update_list_if_needed(double dt) {
 
 void DemWorld::compute_forces(double dt) {
   const bool clip = parameters_.clip_normal_force;
+  const int threads = std::max(1, parameters_.threads);
   const int n = element_count();
   for (int i = 0; i < n; ++i) {
     force_[i] = elements_[i].fixed ? Eigen::Vector3d::Zero()
@@ -111,7 +112,8 @@ void DemWorld::compute_forces(double dt) {
     torque_[i].setZero();
   }
   const int pair_count = static_cast<int>(pairs_.size());
-#pragma omp parallel for schedule(dynamic, 512) if (pair_count > kParallelThreshold)
+  const bool parallel_pairs = threads > 1 && pair_count > kParallelThreshold;
+#pragma omp parallel for schedule(dynamic, 512) if (parallel_pairs) num_threads(threads)
   for (int k = 0; k < pair_count; ++k) {
     ContactPair& p = pairs_[k];
     const ContactGeometry g = pair_geometry(*this, p);
@@ -126,7 +128,8 @@ void DemWorld::compute_forces(double dt) {
   // contact whose triangle point lies on or below the tangent plane of an accepted one is the
   // same surface seen from a neighbouring triangle.
   const int groups = static_cast<int>(triangle_group_start_.size()) - 1;
-#pragma omp parallel for schedule(dynamic, 64) if (groups > kParallelThreshold / 8)
+  const bool parallel_groups = threads > 1 && groups > kParallelThreshold / 8;
+#pragma omp parallel for schedule(dynamic, 64) if (parallel_groups) num_threads(threads)
   for (int gi = 0; gi < groups; ++gi) {
     const int begin = triangle_group_start_[gi];
     const int end = triangle_group_start_[gi + 1];
@@ -230,8 +233,10 @@ void DemWorld::apply_fluid(const std::vector<Eigen::Vector3d>& ambient_velocity,
 
 void DemWorld::integrate(double dt) {
   const double size = parameters_.region_size;
+  const int threads = std::max(1, parameters_.threads);
   const int count = static_cast<int>(moving_.size());
-#pragma omp parallel for schedule(static) if (count > kParallelThreshold)
+  const bool parallel_elements = threads > 1 && count > kParallelThreshold;
+#pragma omp parallel for schedule(static) if (parallel_elements) num_threads(threads)
   for (int k = 0; k < count; ++k) {
     Element& e = elements_[moving_[k]];
     // Eq. (9) in leapfrog form: v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.

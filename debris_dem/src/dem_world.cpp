@@ -90,15 +90,6 @@ int DemWorld::add_cylinder(const Eigen::Vector3d& center, const Eigen::Vector3d&
   return add_element(e, center, material);
 }
 
-int DemWorld::vertex_index(const Eigen::Vector3d& p) {
-  // Shared mesh vertices are recognised by position (tolerance far below any element size).
-  for (int i = 0; i < static_cast<int>(vertex_positions_.size()); ++i) {
-    if ((vertex_positions_[i] - p).norm() <= 1e-9) return i;
-  }
-  vertex_positions_.push_back(p);
-  return static_cast<int>(vertex_positions_.size()) - 1;
-}
-
 int DemWorld::add_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            const Eigen::Vector3d& c, const Material& material) {
   Element e;
@@ -109,9 +100,6 @@ int DemWorld::add_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   const Eigen::Vector3d normal = e.edge1.cross(e.edge2);
   if (!(normal.norm() > 0.0)) throw std::invalid_argument("add_triangle: degenerate triangle");
   e.normal = normal.normalized();
-  e.vertex_id[0] = vertex_index(a);
-  e.vertex_id[1] = vertex_index(b);
-  e.vertex_id[2] = vertex_index(c);
   const Eigen::Vector3d centroid = (e.edge1 + e.edge2) / 3.0;
   e.bounding_radius =
       std::max({centroid.norm(), (e.edge1 - centroid).norm(), (e.edge2 - centroid).norm()});

@@ -208,4 +208,17 @@ void prescribed_flume_flow(const DemWorld& world, const Eigen::Vector3d& surface
   }
 }
 
+double capture_flow_factor(double z, double depth, double dam_depth) {
+  if (z < 0.0 || z > dam_depth || dam_depth <= 0.0) return 0.0;
+  // Eq. (51): alpha = 1.8 h / h_D - 1, beta = 1; eq. (52): alpha >= 0.1 with beta adjusted so
+  // that (alpha + beta) / 2 h_D = 0.9 h, the discharge of eq. (50).
+  double alpha = 1.8 * depth / dam_depth - 1.0;
+  double beta = 1.0;
+  if (alpha <= 0.1) {
+    alpha = 0.1;
+    beta = 1.8 * depth / dam_depth - alpha;
+  }
+  return (beta - alpha) * z / dam_depth + alpha;  // eq. (53)
+}
+
 }  // namespace cosim::dem

@@ -34,7 +34,9 @@ MpsParameters parse_parameters(scenario::Section& section) {
   p.pcg_max_iterations =
       section.integer("pcg_max_iterations", p.pcg_max_iterations, Range::between(1, 1e7));
   p.compressibility = section.number("compressibility", p.compressibility, Range::non_negative());
-  const std::string source = section.text("source_term", "mixed", {"mixed", "density"});
+  const std::string default_source =
+      p.source_term == MpsParameters::SourceTerm::mixed ? "mixed" : "density";
+  const std::string source = section.text("source_term", default_source, {"mixed", "density"});
   p.source_term =
       source == "mixed" ? MpsParameters::SourceTerm::mixed : MpsParameters::SourceTerm::density;
   p.pressure_relaxation =
@@ -89,6 +91,7 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
       r.probe_x = reference.number("probe_x");
       r.probe_depths = reference.numbers("probe_depths", Range::positive());
       r.average_from = reference.number("average_from", 0.0, Range::non_negative());
+      r.probe_radius = reference.number("probe_radius", 1.5 * spacing, Range::positive());
     }
     config.reference = r;
   }

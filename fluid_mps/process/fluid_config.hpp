@@ -33,6 +33,7 @@ struct ReferenceSettings {
   double still_depth = 0;
   double probe_x = 0;
   double average_from = 0;  // hydrostatic: time averaging starts here
+  double probe_radius = 0;  // hydrostatic: particles within this radius are averaged [m]
 };
 
 struct FluidConfig {

@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
     int64_t steps = 0, pcg_iterations = 0;
     int most_pcg_iterations = 0;
     Eigen::Vector3d undelivered = Eigen::Vector3d::Zero();
+    Eigen::Vector3d reaction_impulse = Eigen::Vector3d::Zero();  // given to the fluid by solids
+    double previous_dt = 0.0;  // window 1 applies the solids' window-0 drag, which is zero
     std::vector<double> water;
     while (true) {
       const coupler::Window window = participant.next_window();
@@ -105,21 +107,29 @@ int main(int argc, char** argv) {
         report.info()["most_pcg_iterations"] = most_pcg_iterations;
         report.info()["undelivered_solid_force_impulse"] = {undelivered.x(), undelivered.y(),
                                                             undelivered.z()};
+        report.info()["solid_reaction_impulse"] = {reaction_impulse.x(), reaction_impulse.y(),
+                                                   reaction_impulse.z()};
         participant.finished(report.dump());
         return;
       }
       auto solids = link.receive_solids(window);
       int window_steps = 0;
       if (window.dt > 0.0) {
-        // The solids' drag acts on the fluid with the opposite sign (momentum conservation).
+        // The solids' drag of the previous window acts on the fluid with the opposite sign,
+        // scaled so that the impulse equals the one the solids took (momentum conservation
+        // also when adaptive windows change length).
+        const double impulse_scale = previous_dt / window.dt;
         for (const auto& solid : solids) {
           std::vector<Eigen::Vector3d> reaction(solid.drag.size());
-          for (std::size_t i = 0; i < reaction.size(); ++i)
-            reaction[i] = -force_scale * solid.drag[i];
+          for (std::size_t i = 0; i < reaction.size(); ++i) {
+            reaction[i] = -force_scale * impulse_scale * solid.drag[i];
+            reaction_impulse += reaction[i] * window.dt;
+          }
           const auto delivery =
               system->apply_point_forces(solid.positions, reaction, config.sample_radius);
           undelivered += delivery.undelivered_force * window.dt;
         }
+        previous_dt = window.dt;
         // The window is the fluid step; a window beyond the stable step is split.
         const int pieces =
             std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));

@@ -69,7 +69,7 @@ void ReferenceTracker::observe(const FluidSystem& system) {
     return;
   }
   if (system.time() < settings_.average_from) return;
-  const double radius = 2.0 * system.parameters().particle_spacing;
+  const double radius = settings_.probe_radius;
   for (std::size_t i = 0; i < settings_.probe_depths.size(); ++i) {
     const Eigen::Vector3d probe(settings_.probe_x,
                                 settings_.still_depth - settings_.probe_depths[i], 0.0);

@@ -15,8 +15,10 @@ std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
                                            const std::vector<Eigen::Vector3d>& points,
                                            double radius) {
   if (!(radius > 0.0)) throw std::invalid_argument("sampling radius must be positive");
-  const double cell = std::max(radius, 2.0 * p.particle_spacing);
-  NeighbourGrid grid(p.dimension, bounding_box(positions, p.dimension, cell), cell);
+  double cell = std::max(radius, 2.0 * p.particle_spacing);
+  // Periodic runs: at least three cells per period; query() then reaches over several cells.
+  if (p.periodic.enabled) cell = std::min(cell, p.periodic.length() / 3.0);
+  NeighbourGrid grid(p.dimension, bounding_box(positions, p.dimension, cell), cell, p.periodic);
   grid.build(positions);
   std::vector<std::vector<int>> result(points.size());
   const int count = static_cast<int>(points.size());

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/pressure_solver.hpp"
 
@@ -16,6 +17,30 @@ namespace {
 
 bool is_fluid(ParticleKind kind) {
   return kind == ParticleKind::fluid;
+}
+
+bool is_inactive(ParticleKind kind) {
+  return kind == ParticleKind::inactive;
+}
+
+// Grid over the active particles (inactive ones of the open-boundary pool are left out), periodic
+// in x when enabled; `include` is filled only if some particle is inactive.
+NeighbourGrid active_grid(const MpsParameters& p, const std::vector<Eigen::Vector3d>& positions,
+                          const std::vector<ParticleKind>& kinds, double margin, double cell,
+                          std::vector<char>& include) {
+  include.clear();
+  std::vector<Eigen::Vector3d> active;
+  const bool any_inactive = std::any_of(kinds.begin(), kinds.end(), is_inactive);
+  if (any_inactive) {
+    include.resize(kinds.size());
+    for (std::size_t i = 0; i < kinds.size(); ++i) {
+      include[i] = is_inactive(kinds[i]) ? 0 : 1;
+      if (include[i]) active.push_back(positions[i]);
+    }
+  }
+  return NeighbourGrid(p.dimension,
+                       bounding_box(any_inactive ? active : positions, p.dimension, margin), cell,
+                       p.periodic);
 }
 
 void validate(const MpsParameters& p) {
@@ -41,6 +66,11 @@ void validate(const MpsParameters& p) {
   require(p.compressibility >= 0.0, "compressibility must be >= 0");
   require(p.pressure_relaxation > 0.0 && p.pressure_relaxation <= 1.0,
           "pressure_relaxation must be in (0, 1]");
+  const double largest_radius = std::max({p.radius_density_over_l0, p.radius_gradient_over_l0,
+                                          p.radius_laplacian_over_l0, p.collision_distance_ratio}) *
+                                p.particle_spacing;
+  require(!p.periodic.enabled || p.periodic.length() >= 3.0 * largest_radius,
+          "periodic length must be at least three times the largest influence radius");
 }
 
 }  // namespace
@@ -94,12 +124,17 @@ void FluidSystem::initialise() {
     domain_box_.min().z() = -l0;
     domain_box_.max().z() = l0;
   }
+  if (p.periodic.enabled) {
+    for (auto& x : positions_) x.x() = p.periodic.fold(x.x());
+  }
   check_stability(step_);
   // Initial number densities for the accessor (the step recomputes them at r*).
   const double re_n = p.radius_density_over_l0 * l0;
-  NeighbourGrid grid(p.dimension, bounding_box(positions_, p.dimension, re_n), re_n);
-  grid.build(positions_);
-  const NeighbourList list = grid.neighbours(positions_, re_n);
+  std::vector<char> include;
+  NeighbourGrid grid = active_grid(p, positions_, kinds_, re_n, re_n, include);
+  grid.build(positions_, include.empty() ? nullptr : &include);
+  NeighbourList list = grid.neighbours(positions_, re_n);
+  remove_partition_crossings(list, positions_, p.partitions, p.periodic);
   number_densities_.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = list.begin(static_cast<int>(i)); k < list.end(static_cast<int>(i)); ++k) {
@@ -132,6 +167,7 @@ void FluidSystem::check_stability(long step) const {
   const int n = particle_count();
   const bool two_d = parameters_.dimension == 2;
   for (int i = 0; i < n; ++i) {
+    if (is_inactive(kinds_[i])) continue;  // pooled by the open boundaries
     const Eigen::Vector3d& x = positions_[i];
     const Eigen::Vector3d& u = velocities_[i];
     if (!x.allFinite()) throw StabilityError(step, i, "position", "not finite");
@@ -178,18 +214,35 @@ StepReport FluidSystem::step(double dt) {
 
   // Particles move less than l0 per step, so one grid box (around r^n, grown by two search
   // radii) holds r* too; cells are clamped at its edges anyway.
-  NeighbourGrid grid(d, bounding_box(positions_, d, 2.0 * search_radius), search_radius);
+  // Periodic runs wrap the cells in x (seed 001 section 2.2(4)); inactive particles are left out.
+  std::vector<char> include;
+  NeighbourGrid grid =
+      active_grid(p, positions_, kinds_, 2.0 * search_radius, search_radius, include);
+  const std::vector<char>* included = include.empty() ? nullptr : &include;
+  const PeriodicBoundary& periodic = p.periodic;
+  auto build_list = [&](const std::vector<Eigen::Vector3d>& x, double radius) {
+    grid.build(x, included);
+    NeighbourList result = grid.neighbours(x, radius);
+    remove_partition_crossings(result, x, p.partitions, periodic);  // seed 001 section 2.2(1)
+    return result;
+  };
+  // Constant streamwise pressure difference of a periodic channel as a body force (seed 000
+  // section 3.1): a = dp / (rho L).
+  Eigen::Vector3d driving = Eigen::Vector3d::Zero();
+  if (periodic.enabled)
+    driving.x() = periodic.driving_pressure_drop / (p.density * periodic.length());
 
   // 1. Explicit part at r^n: viscosity (seed 000 eq. (3)), gravity and coupling forces.
-  grid.build(positions_);
-  NeighbourList list = grid.neighbours(positions_, re_l);
+  NeighbourList list = build_list(positions_, re_l);
   const double viscous_factor = p.kinematic_viscosity * 2.0 * d / (n0_l * lambda);
   // Number density at r^n, for the density-error part of the mixed source term.
   std::vector<double> density_now(n, 0.0);
   std::vector<Eigen::Vector3d> velocity_star(velocities_);
   std::vector<Eigen::Vector3d> position_star(positions_);
+  std::vector<Eigen::Vector3d> wall_viscous(n, Eigen::Vector3d::Zero());
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
+    if (is_inactive(kinds_[i])) continue;
     double density_sum = 0.0;
     for (int k = list.begin(i); k < list.end(i); ++k) density_sum += weight(list.distance[k], re_n);
     density_now[i] = density_sum;
@@ -197,13 +250,18 @@ StepReport FluidSystem::step(double dt) {
       Eigen::Vector3d laplacian = Eigen::Vector3d::Zero();
       for (int k = list.begin(i); k < list.end(i); ++k) {
         const int j = list.index[k];
-        laplacian += (velocities_[j] - velocities_[i]) * weight(list.distance[k], re_l);
+        const Eigen::Vector3d term =
+            (velocities_[j] - velocities_[i]) * weight(list.distance[k], re_l);
+        laplacian += term;
+        if (!is_fluid(kinds_[j])) wall_viscous[i] += term;
       }
       velocity_star[i] +=
-          dt * (viscous_factor * laplacian + p.gravity + external_accelerations_[i]);
+          dt * (viscous_factor * laplacian + p.gravity + driving + external_accelerations_[i]);
     }
     position_star[i] += dt * velocity_star[i];
   }
+  for (int i = 0; i < n; ++i) report.wall_viscous_force += wall_viscous[i];
+  report.wall_viscous_force *= particle_mass_ * viscous_factor;
   for (int i = 0; i < n; ++i) {
     if (!position_star[i].allFinite() || !velocity_star[i].allFinite()) {
       throw StabilityError(this_step, i, "velocity", "not finite after the explicit step");
@@ -216,8 +274,7 @@ StepReport FluidSystem::step(double dt) {
   // wall, half between two fluid particles), so fluid-fluid collisions conserve momentum.
   // All corrections use the pre-collision velocities: order independent, thus deterministic.
   if (collision_distance > 0.0) {
-    grid.build(position_star);
-    list = grid.neighbours(position_star, collision_distance);
+    list = build_list(position_star, collision_distance);
     std::vector<Eigen::Vector3d> correction(n, Eigen::Vector3d::Zero());
     std::vector<int> collided(n, 0);
 #pragma omp parallel for schedule(static) if (n >= 4096)
@@ -227,7 +284,7 @@ StepReport FluidSystem::step(double dt) {
         const int j = list.index[k];
         const double r = list.distance[k];
         if (r <= 0.0) continue;
-        const Eigen::Vector3d normal = (position_star[j] - position_star[i]) / r;
+        const Eigen::Vector3d normal = periodic.wrap(position_star[j] - position_star[i]) / r;
         const double approach = (velocity_star[j] - velocity_star[i]).dot(normal);
         if (approach >= 0.0) continue;
         const double share = is_fluid(kinds_[j]) ? 0.5 : 1.0;
@@ -244,8 +301,7 @@ StepReport FluidSystem::step(double dt) {
   }
 
   // 3. Number density at r* (seed 001 eq. (7)) and free-surface detection (n* < beta n0).
-  grid.build(position_star);
-  list = grid.neighbours(position_star, search_radius);
+  list = build_list(position_star, search_radius);
   // Velocity divergence at r* with the density radius (seed 001 eq. (8) applied to u . r_ij).
   number_densities_.assign(n, 0.0);
   std::vector<double> divergence(n, 0.0);
@@ -258,9 +314,9 @@ StepReport FluidSystem::step(double dt) {
       if (w <= 0.0) continue;
       const int j = list.index[k];
       sum += w;
-      divergence_sum +=
-          (velocity_star[j] - velocity_star[i]).dot(position_star[j] - position_star[i]) / (r * r) *
-          w;
+      divergence_sum += (velocity_star[j] - velocity_star[i])
+                            .dot(periodic.wrap(position_star[j] - position_star[i])) /
+                        (r * r) * w;
     }
     number_densities_[i] = sum;
     divergence[i] = d / n0_n * divergence_sum;
@@ -269,7 +325,7 @@ StepReport FluidSystem::step(double dt) {
   std::vector<int> unknown(n, -1);
   std::vector<int> unknown_particle;
   for (int i = 0; i < n; ++i) {
-    if (kinds_[i] == ParticleKind::dummy) continue;
+    if (kinds_[i] == ParticleKind::dummy || is_inactive(kinds_[i])) continue;
     if (number_densities_[i] < p.surface_threshold * n0_n) {
       ++report.surface_particles;
       continue;
@@ -368,7 +424,7 @@ StepReport FluidSystem::step(double dt) {
       const double r = list.distance[k];
       if (kinds_[j] == ParticleKind::dummy || r >= re_g) continue;
       gradient += (pressure[j] - minimum) / (r * r) * weight(r, re_g) *
-                  (position_star[j] - position_star[i]);
+                  periodic.wrap(position_star[j] - position_star[i]);
     }
     const Eigen::Vector3d correction = -gradient_factor * gradient;
     next_velocity[i] += correction;
@@ -376,6 +432,9 @@ StepReport FluidSystem::step(double dt) {
   }
 
   positions_ = std::move(next_position);
+  if (periodic.enabled) {  // re-entry at x_min (seed 001 fig. 2.4 (2))
+    for (int i = 0; i < n; ++i) positions_[i].x() = periodic.fold(positions_[i].x());
+  }
   velocities_ = std::move(next_velocity);
   pressures_ = std::move(pressure);
   std::fill(external_accelerations_.begin(), external_accelerations_.end(),
@@ -387,6 +446,22 @@ StepReport FluidSystem::step(double dt) {
   }
   check_stability(step_);
   return report;
+}
+
+void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& position,
+                               const Eigen::Vector3d& velocity) {
+  if (i < 0 || i >= particle_count()) throw std::out_of_range("set_particle: bad index");
+  kinds_[i] = kind;
+  positions_[i] = position;
+  if (parameters_.periodic.enabled) positions_[i].x() = parameters_.periodic.fold(position.x());
+  velocities_[i] = velocity;
+  pressures_[i] = 0.0;
+  external_accelerations_[i].setZero();
+}
+
+void FluidSystem::set_velocity(int i, const Eigen::Vector3d& velocity) {
+  if (i < 0 || i >= particle_count()) throw std::out_of_range("set_velocity: bad index");
+  velocities_[i] = velocity;
 }
 
 MpsState FluidSystem::save_state() const {

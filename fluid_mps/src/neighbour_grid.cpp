@@ -20,15 +20,30 @@ Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, 
   return box;
 }
 
-NeighbourGrid::NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, double cell_size)
-    : dimension_(dimension), origin_(box.min()), cell_size_(cell_size) {
+NeighbourGrid::NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, double cell_size,
+                             const PeriodicBoundary& periodic)
+    : dimension_(dimension), origin_(box.min()), cell_size_(cell_size), periodic_(periodic) {
   if (!(cell_size > 0.0) || box.isEmpty()) {
     throw std::invalid_argument("NeighbourGrid: empty box or non-positive cell size");
   }
-  const Eigen::Vector3d extent = box.sizes();
+  Eigen::Vector3d extent = box.sizes();
+  if (periodic_.enabled) {
+    // Seam: whole cells over one period (seed 001 section 2.2(4), cells instead of ghosts).
+    const double period = periodic_.length();
+    const int nx = static_cast<int>(std::floor(period / cell_size * (1.0 + 1e-12)));
+    if (nx < 3) {
+      throw std::invalid_argument("NeighbourGrid: periodic length below three cell sizes");
+    }
+    cell_size_ = period / nx;
+    origin_.x() = periodic_.x_min;
+    extent.x() = period;
+  }
   for (int axis = 0; axis < 3; ++axis) {
     const bool flat = axis >= dimension;
-    cells_[axis] = flat ? 1 : std::max(1, static_cast<int>(std::ceil(extent[axis] / cell_size)));
+    cells_[axis] = flat ? 1 : std::max(1, static_cast<int>(std::ceil(extent[axis] / cell_size_)));
+  }
+  if (periodic_.enabled) {
+    cells_.x() = static_cast<int>(std::lround(extent.x() / cell_size_));
   }
   const double cell_count = static_cast<double>(cells_.x()) * cells_.y() * cells_.z();
   if (cell_count > 2e8) {
@@ -39,33 +54,63 @@ NeighbourGrid::NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, doub
 Eigen::Array3i NeighbourGrid::cell_of(const Eigen::Vector3d& position) const {
   Eigen::Array3i cell(0, 0, 0);
   for (int axis = 0; axis < dimension_; ++axis) {
-    const int c = static_cast<int>(std::floor((position[axis] - origin_[axis]) / cell_size_));
+    const double coordinate = axis == 0 ? periodic_.fold(position.x()) : position[axis];
+    const int c = static_cast<int>(std::floor((coordinate - origin_[axis]) / cell_size_));
     cell[axis] = std::clamp(c, 0, cells_[axis] - 1);
   }
   return cell;
 }
 
-void NeighbourGrid::build(const std::vector<Eigen::Vector3d>& positions) {
+void NeighbourGrid::x_range(int x, int reach, std::vector<int>& xs) const {
+  xs.clear();
+  const int nx = cells_.x();
+  if (!periodic_.enabled) {
+    for (int c = std::max(0, x - reach); c <= std::min(nx - 1, x + reach); ++c) xs.push_back(c);
+    return;
+  }
+  if (2 * reach + 1 >= nx) {
+    for (int c = 0; c < nx; ++c) xs.push_back(c);
+    return;
+  }
+  for (int c = x - reach; c <= x + reach; ++c) xs.push_back(((c % nx) + nx) % nx);
+  std::sort(xs.begin(), xs.end());
+}
+
+void NeighbourGrid::build(const std::vector<Eigen::Vector3d>& positions,
+                          const std::vector<char>* include) {
   const std::size_t cell_count = static_cast<std::size_t>(cells_.x()) * cells_.y() * cells_.z();
   const int n = static_cast<int>(positions.size());
+  if (include && include->size() != positions.size()) {
+    throw std::invalid_argument("NeighbourGrid::build: include and positions differ in size");
+  }
+  if (include) {
+    included_ = *include;
+  } else {
+    included_.clear();
+  }
   std::vector<std::int64_t> cell_index(n);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) cell_index[i] = linear(cell_of(positions[i]));
   // Counting sort: stable, so particles of one cell stay in index order.
   cell_start_.assign(cell_count + 1, 0);
-  for (int i = 0; i < n; ++i) ++cell_start_[cell_index[i] + 1];
+  auto taken = [&](int i) { return included_.empty() || included_[i] != 0; };
+  for (int i = 0; i < n; ++i) {
+    if (taken(i)) ++cell_start_[cell_index[i] + 1];
+  }
   for (std::size_t c = 0; c < cell_count; ++c) cell_start_[c + 1] += cell_start_[c];
   std::vector<std::int64_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  sorted_.resize(n);
-  for (int i = 0; i < n; ++i) sorted_[fill[cell_index[i]]++] = i;
+  sorted_.resize(cell_start_[cell_count]);
+  for (int i = 0; i < n; ++i) {
+    if (taken(i)) sorted_[fill[cell_index[i]]++] = i;
+  }
 }
 
 template <class Visit>
-void NeighbourGrid::visit_cells(const Eigen::Array3i& low, const Eigen::Array3i& high,
-                                Visit&& visit) const {
+void NeighbourGrid::visit_cells(const std::vector<int>& xs, const Eigen::Array3i& low,
+                                const Eigen::Array3i& high, Visit&& visit) const {
   for (int z = low.z(); z <= high.z(); ++z)
     for (int y = low.y(); y <= high.y(); ++y)
-      for (int x = low.x(); x <= high.x(); ++x) {
+      for (int x : xs) {
         const std::int64_t c = linear(Eigen::Array3i(x, y, z));
         for (std::int64_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) visit(sorted_[k]);
       }
@@ -81,39 +126,56 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
   NeighbourList list;
   list.radius = radius;
   list.offset.assign(n + 1, 0);
-  auto range = [&](int i, Eigen::Array3i& low, Eigen::Array3i& high) {
+  auto range = [&](int i, std::vector<int>& xs, Eigen::Array3i& low, Eigen::Array3i& high) {
     const Eigen::Array3i cell = cell_of(positions[i]);
     low = (cell - 1).max(0);
     high = (cell + 1).min(cells_ - 1);
+    x_range(cell.x(), 1, xs);
+  };
+  auto skipped = [&](int i) { return !included_.empty() && included_[i] == 0; };
+  auto distance2 = [&](int i, int j) {
+    return periodic_.wrap(positions[j] - positions[i]).squaredNorm();
   };
   // Pass 1 counts, pass 2 fills: both per particle, hence thread-count independent.
-#pragma omp parallel for schedule(dynamic, 256) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    Eigen::Array3i low, high;
-    range(i, low, high);
-    std::int64_t count = 0;
-    visit_cells(low, high, [&](int j) {
-      if (j != i && (positions[j] - positions[i]).squaredNorm() < radius2) ++count;
-    });
-    list.offset[i + 1] = count;
+#pragma omp parallel if (n >= 4096)
+  {
+    std::vector<int> xs;
+    xs.reserve(8);
+#pragma omp for schedule(dynamic, 256)
+    for (int i = 0; i < n; ++i) {
+      if (skipped(i)) continue;
+      Eigen::Array3i low, high;
+      range(i, xs, low, high);
+      std::int64_t count = 0;
+      visit_cells(xs, low, high, [&](int j) {
+        if (j != i && distance2(i, j) < radius2) ++count;
+      });
+      list.offset[i + 1] = count;
+    }
   }
   for (int i = 0; i < n; ++i) list.offset[i + 1] += list.offset[i];
   list.index.resize(list.offset[n]);
   list.distance.resize(list.offset[n]);
-#pragma omp parallel for schedule(dynamic, 256) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    Eigen::Array3i low, high;
-    range(i, low, high);
-    std::int64_t k = list.offset[i];
-    visit_cells(low, high, [&](int j) {
-      if (j == i) return;
-      const double d2 = (positions[j] - positions[i]).squaredNorm();
-      if (d2 < radius2) {
-        list.index[k] = j;
-        list.distance[k] = std::sqrt(d2);
-        ++k;
-      }
-    });
+#pragma omp parallel if (n >= 4096)
+  {
+    std::vector<int> xs;
+    xs.reserve(8);
+#pragma omp for schedule(dynamic, 256)
+    for (int i = 0; i < n; ++i) {
+      if (skipped(i)) continue;
+      Eigen::Array3i low, high;
+      range(i, xs, low, high);
+      std::int64_t k = list.offset[i];
+      visit_cells(xs, low, high, [&](int j) {
+        if (j == i) return;
+        const double d2 = distance2(i, j);
+        if (d2 < radius2) {
+          list.index[k] = j;
+          list.distance[k] = std::sqrt(d2);
+          ++k;
+        }
+      });
+    }
   }
   return list;
 }
@@ -129,9 +191,11 @@ void NeighbourGrid::query(const std::vector<Eigen::Vector3d>& positions,
     low[axis] = std::max(0, cell[axis] - reach);
     high[axis] = std::min(cells_[axis] - 1, cell[axis] + reach);
   }
+  std::vector<int> xs;
+  x_range(cell.x(), reach, xs);
   const double radius2 = radius * radius;
-  visit_cells(low, high, [&](int j) {
-    if ((positions[j] - point).squaredNorm() < radius2) found.push_back(j);
+  visit_cells(xs, low, high, [&](int j) {
+    if (periodic_.wrap(positions[j] - point).squaredNorm() < radius2) found.push_back(j);
   });
 }
 

@@ -73,7 +73,7 @@ MpsState load_state(const std::string& path) {
     read(in, state.pressures[i], path);
     std::int32_t kind = 0;
     read(in, kind, path);
-    if (kind < 0 || kind > 2) throw std::runtime_error("load_state: bad particle kind in " + path);
+    if (kind < 0 || kind > 3) throw std::runtime_error("load_state: bad particle kind in " + path);
     state.kinds[i] = static_cast<ParticleKind>(kind);
   }
   return state;

@@ -211,6 +211,36 @@ TEST(DemWorld, StabilityErrorsNameElementAndQuantity) {
   }
 }
 
+TEST(DemWorld, LogsComeToRestOnFloorAndOnEachOther) {
+  // Two parallel logs on the floor (side on triangle), a third dropped across both (side-side
+  // twice), a standing log (base face on triangle) and a sphere on top of a fixed horizontal
+  // column (sphere on cylinder side).
+  DemParameters p;
+  DemWorld world(p);
+  Material m;
+  m.density = 800;
+  world.add_triangle({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, m);
+  const double r = 0.005;
+  const int left = world.add_cylinder({0, -0.03, r}, Eigen::Vector3d::UnitX(), r, 0.1, m);
+  const int right = world.add_cylinder({0, 0.03, r}, Eigen::Vector3d::UnitX(), r, 0.1, m);
+  const int crossing =
+      world.add_cylinder({0.01, 0.0, 3 * r + 0.01}, Eigen::Vector3d::UnitY(), r, 0.1, m);
+  const int standing = world.add_cylinder({0.2, 0, 0.05}, Eigen::Vector3d::UnitZ(), r, 0.1, m);
+  world.add_cylinder({-0.2, 0, 0.05}, Eigen::Vector3d::UnitY(), r, 0.1, m, true);
+  const int ball = world.add_sphere({-0.2, 0.001, 0.05 + 2 * r + 0.005}, r, m);
+  for (int w = 0; w < 1500; ++w) world.advance(1e-3, {}, {});
+  EXPECT_LT(world.kinetic_energy(), 1e-8);  // speeds below 2 mm/s
+  // Heights less the static spring compression m g / K (or less, shared by two contacts).
+  const double sag = 2e-4;
+  EXPECT_NEAR(world.position(left).z(), r, sag);
+  EXPECT_NEAR(world.position(right).z(), r, sag);
+  EXPECT_NEAR(world.position(crossing).z(), 3 * r, 2 * sag);
+  EXPECT_GT(std::abs(world.axis(crossing).y()), 0.999);
+  EXPECT_GT(std::abs(world.axis(standing).z()), 0.999);
+  EXPECT_NEAR(world.position(standing).z(), 0.05, sag);
+  EXPECT_NEAR(world.position(ball).z(), 0.05 + 2 * r, sag);
+}
+
 TEST(DemWorld, GateHoldsPackingUntilRemoved) {
   DemParameters p;
   p.gravity = slope_gravity(15.0);
@@ -233,6 +263,20 @@ TEST(DemWorld, GateHoldsPackingUntilRemoved) {
   int passed = 0;
   for (const int i : pack.spheres) passed += world.position(i).x() > 0.1 ? 1 : 0;
   EXPECT_GT(passed, 5);
+}
+
+TEST(Scenes, CaptureFlowKeepsTheDischargeOfTheApproachFlow) {
+  // Eq. (50) carries 0.9 U h; eq. (51)-(53) must carry the same over any ponded depth h_D.
+  const double h = 0.03;
+  for (const double dam_depth : {0.02, 0.03, 0.045, 0.08, 0.2}) {
+    double discharge = 0.0;
+    const int n = 20000;
+    for (int k = 0; k < n; ++k) {
+      discharge += capture_flow_factor((k + 0.5) * dam_depth / n, h, dam_depth) * dam_depth / n;
+    }
+    EXPECT_NEAR(discharge, 0.9 * h, 1e-9) << dam_depth;
+    EXPECT_GE(capture_flow_factor(0.0, h, dam_depth), 0.1 - 1e-12);
+  }
 }
 
 }  // namespace

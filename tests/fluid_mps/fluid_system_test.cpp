@@ -227,3 +227,24 @@ TEST(MpsFluidSystem, ThreeDimensionalBlockSteps) {
             0.5);
   EXPECT_GT(system.pressures()[interior], 0.0);
 }
+
+TEST(MpsScenes, DamBreakBuilderAndObservers) {
+  MpsParameters p;
+  p.particle_spacing = 0.05715 / 10;
+  const double a = 0.05715;
+  const ParticleSet set = dam_break(p, a, 2 * a, 4 * a, 3 * a, 2, 2);
+  int fluid = 0, wall = 0, dummy = 0;
+  for (ParticleKind kind : set.kinds) {
+    fluid += kind == ParticleKind::fluid;
+    wall += kind == ParticleKind::wall;
+    dummy += kind == ParticleKind::dummy;
+  }
+  EXPECT_EQ(fluid, 10 * 20);
+  EXPECT_EQ(wall, 2 * 40 + 2 * 2 * 30 + 4 * 2);  // bed, two side walls, corner blocks
+  EXPECT_EQ(dummy, 2 * 44 + 2 * 2 * 30 + 4 * 2 + 2 * 2 * 2);
+  EXPECT_FALSE(p.domain.isEmpty());
+  FluidSystem system(p, set);
+  EXPECT_NEAR(surge_front_position(system), a, 1e-12);
+  EXPECT_NEAR(residual_column_height(system), 2 * a, 1e-12);
+  EXPECT_EQ(mean_pressure_at(system, Eigen::Vector3d(0.5 * a, a, 0), 0.5 * a), 0.0);
+}

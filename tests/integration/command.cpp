@@ -23,8 +23,7 @@ CommandResult run_command(const std::string& command, int time_limit_seconds) {
   while (fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 
@@ -46,8 +45,8 @@ nlohmann::json read_summary(const std::filesystem::path& run_dir) {
 }
 
 std::filesystem::path fresh_folder(const std::string& name) {
-  const auto folder = std::filesystem::temp_directory_path() /
-                      fmt::format("cosim-test-{}-{}", name, getpid());
+  const auto folder =
+      std::filesystem::temp_directory_path() / fmt::format("cosim-test-{}-{}", name, getpid());
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   return folder;

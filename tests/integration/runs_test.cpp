@@ -15,17 +15,20 @@
 namespace cosim::testing {
 namespace {
 
-std::string blade() { return test_scene("blade").string(); }
+std::string blade() {
+  return test_scene("blade").string();
+}
 
 TEST(Runs, BladeRunWritesEveryOutputOfARunFolder) {
   const auto runs = fresh_folder("outputs");
-  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const auto run_dir = run_folder_of(result);
   ASSERT_FALSE(run_dir.empty()) << result.output;
-  for (const char* file : {"scenario.yaml", "events.lcmlog", "summary.json", "logs/vegetation_beam.log",
-                           "logs/prescribed_flow.log", "vegetation_beam/plants.h5",
-                           "vegetation_beam/plants.xmf"}) {
+  for (const char* file :
+       {"scenario.yaml", "events.lcmlog", "summary.json", "logs/vegetation_beam.log",
+        "logs/prescribed_flow.log", "vegetation_beam/plants.h5", "vegetation_beam/plants.xmf"}) {
     EXPECT_TRUE(std::filesystem::exists(run_dir / file)) << file;
   }
   const auto summary = read_summary(run_dir);
@@ -41,7 +44,8 @@ TEST(Runs, BladeRunWritesEveryOutputOfARunFolder) {
   const auto& beam = summary["participants"][1];
   EXPECT_EQ(beam["name"], "vegetation_beam");
   EXPECT_GT(beam["steps"].get<int64_t>(), 20) << "the beam sub-cycles inside each window";
-  const double tip = beam["report"]["metrics"]["tip_streamwise_displacement"]["value"].get<double>();
+  const double tip =
+      beam["report"]["metrics"]["tip_streamwise_displacement"]["value"].get<double>();
   EXPECT_GT(tip, 0.0) << "the stream bends the blade downstream";
   // Every default is written into the resolved scenario.
   const auto resolved = scenario::load_yaml_file(run_dir / "scenario.yaml");
@@ -83,9 +87,10 @@ TEST(Runs, TenPercentMessageLossGivesTheSameResultAsNoLoss) {
 
 TEST(Runs, ASolverThatDiesIsNamedWithItsWindowWithinSeconds) {
   const auto runs = fresh_folder("exit");
-  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet --fault vegetation_beam:exit@5",
-                                            blade(), runs.string()),
-                                60);
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet --fault vegetation_beam:exit@5", blade(),
+                            runs.string()),
+                60);
   EXPECT_NE(result.exit_code, 0);
   EXPECT_LT(result.seconds, 10.0);
   const auto summary = read_summary(run_folder_of(result));
@@ -98,9 +103,10 @@ TEST(Runs, ASolverThatDiesIsNamedWithItsWindowWithinSeconds) {
 
 TEST(Runs, ASolverThatHangsIsNamedWithItsWindowWithinTheTimeout) {
   const auto runs = fresh_folder("hang");
-  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet --fault vegetation_beam:hang@7",
-                                            blade(), runs.string()),
-                                60);
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet --fault vegetation_beam:hang@7", blade(),
+                            runs.string()),
+                60);
   EXPECT_NE(result.exit_code, 0);
   EXPECT_LT(result.seconds, 15.0) << "the scene's timeout is 2 s";
   const auto summary = read_summary(run_folder_of(result));
@@ -112,9 +118,10 @@ TEST(Runs, ASolverThatHangsIsNamedWithItsWindowWithinTheTimeout) {
 
 TEST(Runs, ASolverErrorIsReportedWithItsMessage) {
   const auto runs = fresh_folder("throw");
-  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet --fault prescribed_flow:throw@3",
-                                            blade(), runs.string()),
-                                60);
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet --fault prescribed_flow:throw@3", blade(),
+                            runs.string()),
+                60);
   EXPECT_NE(result.exit_code, 0);
   const auto summary = read_summary(run_folder_of(result));
   ASSERT_FALSE(summary.empty()) << result.output;
@@ -153,8 +160,9 @@ TEST(Runs, ReplayDrivesTheBeamBitForBit) {
       run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
   ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
   const auto run_dir = run_folder_of(recorded);
-  const auto replayed = run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
-                                              run_dir.string(), runs.string()));
+  const auto replayed =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run_dir.string(), runs.string()));
   EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
   EXPECT_NE(replayed.output.find("IDENTICAL"), std::string::npos) << replayed.output;
   EXPECT_NE(replayed.output.find("63 fields"), std::string::npos) << replayed.output;
@@ -175,8 +183,9 @@ TEST(Runs, ReplayDetectsADifferentSolver) {
     std::ofstream out(scenario_file);
     out << document;
   }
-  const auto replayed = run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
-                                              run_dir.string(), runs.string()));
+  const auto replayed =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run_dir.string(), runs.string()));
   EXPECT_EQ(replayed.exit_code, 1) << replayed.output;
   EXPECT_NE(replayed.output.find("DIFFERENT"), std::string::npos) << replayed.output;
 }

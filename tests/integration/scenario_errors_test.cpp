@@ -37,8 +37,8 @@ participants:
 void expect_refused(const std::string& yaml, const std::string& expected_location,
                     const std::string& expected_key) {
   const auto folder = write_scene("bad", yaml);
-  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet", folder.string(),
-                                            (folder / "runs").string()));
+  const auto result = run_cosim(
+      fmt::format("run {} --runs-dir {} --quiet", folder.string(), (folder / "runs").string()));
   EXPECT_EQ(result.exit_code, 2) << result.output;
   EXPECT_NE(result.output.find(expected_location), std::string::npos) << result.output;
   EXPECT_NE(result.output.find(expected_key), std::string::npos) << result.output;
@@ -57,8 +57,9 @@ TEST(ScenarioErrors, TheGoodSceneValidates) {
 }
 
 TEST(ScenarioErrors, UnknownKeyIsNamedWithItsLine) {
-  expect_refused(replace(kGood, "        density: 1390", "        density: 1390\n        colour: green"),
-                 "scenario.yaml:16", "colour");
+  expect_refused(
+      replace(kGood, "        density: 1390", "        density: 1390\n        colour: green"),
+      "scenario.yaml:16", "colour");
 }
 
 TEST(ScenarioErrors, WrongTypeIsNamedWithItsLine) {

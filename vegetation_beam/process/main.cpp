@@ -119,6 +119,9 @@ int main(int argc, char** argv) {
     double next_output = 0.0;
     int64_t node_substeps = 0;
     int most_substeps = 0, most_newton_iterations = 0;
+    // Impulse the fluid gave the plants; the last window's is handed over after the run ends.
+    Eigen::Vector3d drag_impulse = Eigen::Vector3d::Zero(),
+                    last_drag_impulse = Eigen::Vector3d::Zero();
     while (true) {
       const coupler::Window window = participant.next_window();
       context.maybe_inject_fault(window.index);
@@ -136,6 +139,9 @@ int main(int argc, char** argv) {
         report.info()["stable_substep"] = field.stable_substep();
         report.info()["most_newton_iterations"] = most_newton_iterations;
         report.info()["kinetic_energy"] = field.kinetic_energy();
+        report.info()["drag_impulse"] = {drag_impulse.x(), drag_impulse.y(), drag_impulse.z()};
+        report.info()["last_window_drag_impulse"] = {last_drag_impulse.x(), last_drag_impulse.y(),
+                                                     last_drag_impulse.z()};
         report.info()["elastic_energy"] = field.elastic_energy();
         participant.finished(report.dump());
         return;
@@ -153,6 +159,9 @@ int main(int argc, char** argv) {
       node_substeps += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count);
       most_substeps = std::max(most_substeps, step.substeps);
       most_newton_iterations = std::max(most_newton_iterations, step.max_newton_iterations);
+      last_drag_impulse.setZero();
+      for (const auto& drag : field.window_mean_drag()) last_drag_impulse += drag * window.dt;
+      drag_impulse += last_drag_impulse;
       record_tip();
       if (field.time() >= next_output - 1e-12 * std::max(1.0, next_output)) {
         writer.write_frame(make_frame(field));

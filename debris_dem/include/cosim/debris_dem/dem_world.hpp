@@ -42,13 +42,18 @@ struct DemParameters {
   // Gravity in the world frame; slope_gravity() in scenes.hpp tilts it for a flume frame.
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};
   double fluid_density = 1000.0;
-  double drag_coefficient_sphere = 0.49;    // seed 004 section 4.1(3), from Hashimoto et al.
-  double drag_coefficient_cylinder = 0.49;  // seed 004 treats logs like an equal-area sphere
-  double list_margin = 5.0e-3;              // r_dam of table 3: extra reach of candidate lists
-  double list_reset_interval = 1.0e-3;      // t_reset of table 3 (s)
+  double drag_coefficient_sphere = 0.49;  // seed 004 section 4.1(3), from Hashimoto et al.
+  // Seed 004 gives a log the drag of a sphere of equal projected area; here the area normal to
+  // the relative flow, 2 r L sin + pi r^2 cos, is used with this coefficient.
+  double drag_coefficient_cylinder = 0.49;
+  double list_margin = 5.0e-3;          // r_dam of table 3: extra reach of candidate lists
+  double list_reset_interval = 1.0e-3;  // t_reset of table 3 (s)
   // Also rebuild the list as soon as two elements may have closed the margin (translation plus a
   // log's end sweep); false keeps only the fixed interval of the seed.
   bool list_sweep_guard = true;
+  // OpenMP threads for contacts, integration and lists. 1 by default: in a co-simulation the
+  // solvers already share the cores, and an oversubscribed barrier costs more than it saves.
+  int threads = 1;
   double safety_factor = 0.1;      // dt = safety_factor * sqrt(m_min / k_max)
   double user_dt = 0.0;            // > 0 forces this sub-step (seed 004: 1e-5 s)
   double max_overlap_ratio = 0.5;  // overlap / smaller radius that stops the run
@@ -83,8 +88,9 @@ class DemWorld {
   // length is the full length; the cylinder spans center +- 0.5 length axis_unit.
   int add_cylinder(const Eigen::Vector3d& center, const Eigen::Vector3d& axis_unit, double radius,
                    double length, const Material& material, bool fixed = false);
-  // Triangles are fixed. Vertices shared by several triangles (same coordinates) are detected
-  // so that a sphere on a shared edge or vertex gets one contact, not one per triangle.
+  // Triangles are fixed and two-sided. Triangles of one mesh may share edges and vertices: the
+  // contacts of an element with several triangles are filtered so that one surface gives one
+  // contact (see compute_forces).
   int add_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                    const Material& material);
   // A removable gate: the quadrilateral p0-p1-p2-p3 as two triangles (seed 004 section 4.1(1):
@@ -163,7 +169,6 @@ class DemWorld {
     Eigen::Vector3d edge1 = Eigen::Vector3d::Zero();
     Eigen::Vector3d edge2 = Eigen::Vector3d::Zero();
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    int vertex_id[3] = {-1, -1, -1};
   };
   [[nodiscard]] const std::vector<Element>& elements() const { return elements_; }
   [[nodiscard]] const std::vector<Material>& materials() const { return materials_; }
@@ -173,7 +178,6 @@ class DemWorld {
  private:
   int add_element(Element element, const Eigen::Vector3d& anchor, const Material& material);
   int material_index(const Material& material);
-  int vertex_index(const Eigen::Vector3d& p);
   void compute_forces(double dt);
   void integrate(double dt);
   void check_stability() const;
@@ -185,7 +189,6 @@ class DemWorld {
   std::vector<Element> elements_;
   std::vector<Material> materials_;
   std::vector<int> moving_;
-  std::vector<Eigen::Vector3d> vertex_positions_;
   std::vector<Eigen::Vector3d> force_;
   std::vector<Eigen::Vector3d> torque_;
   std::vector<Eigen::Vector3d> fluid_force_;  // per moving element, current sub-step

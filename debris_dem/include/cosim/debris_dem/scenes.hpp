@@ -75,4 +75,9 @@ void prescribed_flume_flow(const DemWorld& world, const Eigen::Vector3d& surface
                            double depth, std::vector<Eigen::Vector3d>& velocity,
                            std::vector<double>& water_fraction);
 
+// Seed 004 eq. (51)-(53), the flow just upstream of the dam while debris is being trapped:
+// a trapezoidal profile over the ponded depth h_dam that carries the same discharge as eq. (50)
+// over the approach depth h. Returns the factor on U at height z (0 above h_dam).
+double capture_flow_factor(double z, double depth, double dam_depth);
+
 }  // namespace cosim::dem

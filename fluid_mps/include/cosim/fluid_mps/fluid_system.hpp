@@ -13,11 +13,14 @@ struct StepReport {
   double dt = 0.0;
   int pcg_iterations = 0;
   double pcg_residual = 0.0;
-  bool pcg_converged = true;
+  bool pcg_converged = true;  // false: max iterations hit; the step still completes
   double max_speed = 0.0;     // fluid particles, end of step
   int surface_particles = 0;  // fluid and wall particles with the Dirichlet p = 0 condition
-  int collisions = 0;         // approaching pairs closer than d_c corrected this step
+  int collisions = 0;         // fluid-particle contacts corrected (a fluid-fluid pair counts twice)
   int pressure_unknowns = 0;
+  // Viscous force of the wall and dummy particles on the fluid (Laplacian model, explicit part at
+  // r^n) [N in 3D, N/m in 2D]: the bed shear of a channel.
+  Eigen::Vector3d wall_viscous_force = Eigen::Vector3d::Zero();
 };
 
 // Result of apply_point_forces: forces of points with no fluid inside the radius are dropped.
@@ -84,6 +87,13 @@ class FluidSystem {
   Eigen::Vector3d total_fluid_momentum() const;
 
   MpsState save_state() const;
+
+  // Open boundaries (boundaries.hpp) change particles between steps: kind, position and velocity
+  // of particle i (pressure reset to 0). Arrays keep their size; inactive particles are pooled.
+  void set_particle(int i, ParticleKind kind, const Eigen::Vector3d& position,
+                    const Eigen::Vector3d& velocity);
+  // Velocity of a wall or dummy particle (a moving wall), kept until changed.
+  void set_velocity(int i, const Eigen::Vector3d& velocity);
 
  private:
   void initialise();

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "cosim/fluid_mps/parameters.hpp"
+
 namespace cosim::mps {
 
 // Compressed neighbour lists: the neighbours of i are index[offset[i] .. offset[i+1]) with their
@@ -31,10 +33,16 @@ Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, 
 class NeighbourGrid {
  public:
   // `box` must contain every position (the caller checks escapes first); 2D uses one z layer.
-  NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, double cell_size);
+  // With an enabled `periodic` boundary the x extent is [x_min, x_max) whatever the box, cells
+  // wrap around in x (at least 3 cells, so the cell size may grow to period / floor(period /
+  // cell_size)) and distances are minimum-image distances across the seam.
+  NeighbourGrid(int dimension, const Eigen::AlignedBox3d& box, double cell_size,
+                const PeriodicBoundary& periodic = PeriodicBoundary{});
 
-  // Sorts the particles into cells.
-  void build(const std::vector<Eigen::Vector3d>& positions);
+  // Sorts the particles into cells. With `include`, particles with include[i] == 0 are left out:
+  // they are nobody's neighbour and have no neighbours themselves.
+  void build(const std::vector<Eigen::Vector3d>& positions,
+             const std::vector<char>* include = nullptr);
 
   // All pairs j != i with |r_j - r_i| < radius (radius <= cell size). Parallel and deterministic.
   NeighbourList neighbours(const std::vector<Eigen::Vector3d>& positions, double radius) const;
@@ -44,14 +52,19 @@ class NeighbourGrid {
              double radius, std::vector<int>& found) const;
 
   double cell_size() const { return cell_size_; }
+  const PeriodicBoundary& periodic() const { return periodic_; }
 
  private:
   Eigen::Array3i cell_of(const Eigen::Vector3d& position) const;
   std::int64_t linear(const Eigen::Array3i& cell) const {
     return (static_cast<std::int64_t>(cell.z()) * cells_.y() + cell.y()) * cells_.x() + cell.x();
   }
+  // Visits the cells low..high (y, z) and the x cells of `xs` (already wrapped).
   template <class Visit>
-  void visit_cells(const Eigen::Array3i& low, const Eigen::Array3i& high, Visit&& visit) const;
+  void visit_cells(const std::vector<int>& xs, const Eigen::Array3i& low,
+                   const Eigen::Array3i& high, Visit&& visit) const;
+  // x cells within `reach` of cell x, wrapped when periodic, each once, in ascending order.
+  void x_range(int x, int reach, std::vector<int>& xs) const;
 
   int dimension_;
   Eigen::Vector3d origin_;
@@ -59,6 +72,8 @@ class NeighbourGrid {
   Eigen::Array3i cells_;
   std::vector<std::int64_t> cell_start_;  // size cell count + 1
   std::vector<int> sorted_;               // particle indices ordered by cell, then index
+  std::vector<char> included_;            // empty: all particles
+  PeriodicBoundary periodic_;
 };
 
 }  // namespace cosim::mps

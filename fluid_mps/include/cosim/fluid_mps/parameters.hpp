@@ -3,11 +3,51 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace cosim::mps {
+
+// Periodic boundary in x (streamwise), seed 001 section 2.2(4) and seed 000 section 3.1: a
+// particle leaving x_max re-enters at x_min and every operator (neighbour search, number density,
+// gradient, Laplacian, Poisson matrix, collision) uses the minimum-image distance across the seam
+// (equivalent to seed 001's ghost copies of fig. 2.4 (1), without copying). The constant pressure
+// difference of seed 000 section 3.1 is applied as the equivalent body force: fluid particles get
+// the acceleration driving_pressure_drop / (rho (x_max - x_min)) along +x.
+// The period must exceed three times the largest influence radius.
+struct PeriodicBoundary {
+  bool enabled = false;
+  double x_min = 0.0;
+  double x_max = 0.0;
+  double driving_pressure_drop = 0.0;  // [Pa] over one period, p(x_min) - p(x_max)
+  double length() const { return x_max - x_min; }
+  // Minimum-image displacement (x only); identity when disabled.
+  Eigen::Vector3d wrap(Eigen::Vector3d d) const {
+    if (enabled) {
+      const double l = length();
+      if (d.x() > 0.5 * l) d.x() -= l;
+      if (d.x() < -0.5 * l) d.x() += l;
+    }
+    return d;
+  }
+  // x folded into [x_min, x_max); identity when disabled.
+  double fold(double x) const {
+    if (!enabled) return x;
+    const double l = length();
+    double y = x - l * std::floor((x - x_min) / l);
+    if (y >= x_max) y -= l;  // rounding
+    return y;
+  }
+};
+
+// Thin partition wall of seed 001 section 2.2(1): two particles whose connecting segment crosses
+// a partition segment are not neighbours in any operator (x-y plane; z is ignored).
+struct PartitionSegment {
+  Eigen::Vector2d a = Eigen::Vector2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+};
 
 // Physical and numerical parameters. Equation numbers refer to seed 001 (Maeno et al.) unless
 // marked "seed 000" (Ikari & Gotoh).
@@ -49,6 +89,9 @@ struct MpsParameters {
   // Particles outside are 'escaped'. Empty box: the bounding box of the initial particles grown
   // by 20 l0 on each side.
   Eigen::AlignedBox3d domain;
+  // Open and periodic boundaries (boundaries.hpp): see PeriodicBoundary and PartitionSegment.
+  PeriodicBoundary periodic;
+  std::vector<PartitionSegment> partitions;
 };
 
 // Seed 001's tuned set for its fishway (Run-PF-6): d_cr = 1.0, C_c = -0.8 and a gradient radius
@@ -62,7 +105,10 @@ inline MpsParameters seed001_fishway_parameters(double particle_spacing) {
   return p;
 }
 
-enum class ParticleKind { fluid, wall, dummy };
+// inactive: a recycled particle kept in the pool of the open boundaries (seed 001 section 2.2(3)):
+// it takes part in no operator, is never checked for escape and keeps its slot so that the arrays
+// stay fixed-size.
+enum class ParticleKind { fluid, wall, dummy, inactive };
 
 // Initial particles of a scene. Wall and dummy particles move with their (prescribed) velocity.
 struct ParticleSet {

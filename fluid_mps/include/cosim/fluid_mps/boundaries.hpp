@@ -1,0 +1,123 @@
+// Open boundaries of seed 001 section 2.2: thin partition walls (1), soluble moving wall inflow
+// with automatic water-level control and free outflow with particle recycling (3). The periodic
+// boundary (4) lives in FluidSystem itself (MpsParameters::periodic).
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+#include <vector>
+
+#include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/neighbour_grid.hpp"
+#include "cosim/fluid_mps/parameters.hpp"
+
+namespace cosim::mps {
+
+// Seed 001 section 2.2(1): drops the pairs (i, j) whose connecting segment crosses a partition
+// segment (strictly opposite sides; a pair passing exactly over a segment end is dropped too).
+// Only particles within the list radius of a segment are tested. Keeps the order, so loops over
+// the list stay deterministic. `periodic` gives the minimum-image partner position.
+void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
+                                const std::vector<PartitionSegment>& partitions,
+                                const PeriodicBoundary& periodic = PeriodicBoundary{});
+
+// True if the segment p-q crosses the partition segment (2D, x-y plane).
+bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                       const PartitionSegment& segment);
+
+// Settings of the soluble moving wall inflow (Gotoh et al., seed 001 section 2.2(3)) and of the
+// free outflow. Geometry: bed surface at y = bed_y, inflow line x = inflow_x, flow along +x.
+struct OpenBoundarySettings {
+  double inflow_x = 0.0;
+  double bed_y = 0.0;
+  // Particles of the moving wall block: wall particles with x < inflow_x and y > bed_y at
+  // construction. Each column that passes inflow_x dissolves: its lowest `inflow_rows` particles
+  // become fluid with the wall velocity, the rest return to the pool, and a new column of
+  // `block_rows` wall particles (from the pool) is added l0 behind the last column.
+  int block_rows = 10;
+  // How the inflow is set.
+  //  velocity:  fixed wall velocity `velocity` and `inflow_rows` rows per column;
+  //  discharge: seed 001's automatic level adjustment: at each dissolution the highest fluid
+  //             particle within `level_window` downstream of inflow_x gives the level h; the next
+  //             column releases n = round(h / l0) rows (1..block_rows) and the wall moves at
+  //             U = discharge / (n l0), so the discharge per width stays `discharge`;
+  //  level:     keeps the level at `target_level`: n = round(target_level / l0) rows and an
+  //             integral controller dU/dt = level_gain (target_level - h), U in
+  //             [min_velocity, max_velocity].
+  enum class Control { velocity, discharge, level };
+  Control control = Control::discharge;
+  double velocity = 0.1;  // [m/s]; initial value for discharge / level control
+  int inflow_rows = 5;
+  double discharge = 0.0;     // q per unit width [m^2/s] (2D)
+  double target_level = 0.0;  // [m] above bed_y
+  double level_window = 0.0;  // [m]; 0: 3 l0 (seed 001 uses 3 % of its domain length)
+  double level_gain = 1.0;    // [1/s]
+  double min_velocity = 0.0;
+  double max_velocity = 2.0;
+  // Free outflow: fluid particles with x > outflow_x or y < outflow_y_min leave the flow and are
+  // kept in the pool (kind inactive, velocity 0) for the inflow to reuse (seed 001 section 2.2(3)).
+  double outflow_x = std::numeric_limits<double>::infinity();
+  double outflow_y_min = -std::numeric_limits<double>::infinity();
+};
+
+// Result of one OpenBoundaries::update.
+struct BoundaryUpdate {
+  int dissolved = 0;  // wall particles turned into fluid
+  int recycled = 0;   // fluid particles removed at the outflow
+  int created = 0;    // wall particles taken from the pool for new block columns
+};
+
+// Call update() after every FluidSystem::step. The particle count never changes; the pool is the
+// set of inactive particles (lowest index first, so runs are deterministic and restartable: a
+// restarted system gives the same block and pool).
+class OpenBoundaries {
+ public:
+  OpenBoundaries(FluidSystem& system, OpenBoundarySettings settings);
+
+  BoundaryUpdate update();
+
+  double velocity() const { return velocity_; }  // current wall (inflow) velocity [m/s]
+  int inflow_rows() const { return rows_; }
+  double measured_level() const { return level_; }  // last level above bed_y [m]
+  long dissolved_total() const { return dissolved_total_; }
+  long recycled_total() const { return recycled_total_; }
+  // Fluid volume (area in 2D) released at the inflow so far [m^3, m^2 in 2D].
+  double inflow_volume() const;
+  int pool_size() const;
+  const std::vector<int>& block() const { return block_; }
+  const OpenBoundarySettings& settings() const { return settings_; }
+
+ private:
+  int take_from_pool();
+  void set_block_velocity();
+
+  FluidSystem& system_;
+  OpenBoundarySettings settings_;
+  std::vector<int> block_;
+  double velocity_;
+  int rows_;
+  double level_ = 0.0;
+  double last_dissolution_time_;
+  long dissolved_total_ = 0;
+  long recycled_total_ = 0;
+  int pool_cursor_ = 0;
+};
+
+// Scene: open channel with a soluble moving wall inflow (seed 001 section 2.2(3)). Bed top at
+// y = 0 from x = -(block_columns + 2) l0 to x = length (free overfall at x = length); inflow line
+// at x = 0; a block of block_columns x block_rows wall particles just upstream of it; still water
+// of `initial_depth` on x in [0, length]; `pool_particles` inactive particles parked under the
+// outlet. Fills parameters.domain if empty and `settings` (inflow_x = 0, bed_y = 0, block_rows,
+// outflow_x = length + 3 l0, outflow_y_min = -(layers + 4) l0).
+ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settings, double length,
+                         double initial_depth, double block_height, int block_columns = 4,
+                         int pool_particles = 400, int wall_layers = 2, int dummy_layers = 2);
+
+// Scene: periodic open channel (seed 000 section 3.1, seed 001 section 2.2(4)): x in [0, length)
+// periodic, still water of `depth` over a bed of wall + dummy layers. slope = sin(theta) tilts
+// gravity, g = |g| (sin theta, -cos theta); driving_pressure_drop is left to the caller.
+// Enables parameters.periodic and fills parameters.domain if empty.
+ParticleSet periodic_channel(MpsParameters& parameters, double length, double depth,
+                             double slope = 0.0, int wall_layers = 2, int dummy_layers = 2);
+
+}  // namespace cosim::mps

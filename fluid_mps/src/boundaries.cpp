@@ -1,0 +1,217 @@
+#include "cosim/fluid_mps/boundaries.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace cosim::mps {
+namespace {
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+}  // namespace
+
+bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                       const PartitionSegment& segment) {
+  const Eigen::Vector2d a = segment.a, b = segment.b;
+  const Eigen::Vector2d p2 = p.head<2>(), q2 = q.head<2>();
+  const double side_p = cross(b - a, p2 - a), side_q = cross(b - a, q2 - a);
+  if (!(side_p * side_q < 0.0)) return false;  // same side or touching the partition line
+  const double side_a = cross(q2 - p2, a - p2), side_b = cross(q2 - p2, b - p2);
+  return side_a * side_b <= 0.0;
+}
+
+void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
+                                const std::vector<PartitionSegment>& partitions,
+                                const PeriodicBoundary& periodic) {
+  if (partitions.empty()) return;
+  const int n = static_cast<int>(list.offset.size()) - 1;
+  // Segments near each particle: boxes of the segments grown by the list radius.
+  std::vector<Eigen::AlignedBox2d> boxes;
+  for (const auto& s : partitions) {
+    Eigen::AlignedBox2d box(s.a);
+    box.extend(s.b);
+    box.min().array() -= list.radius;
+    box.max().array() += list.radius;
+    boxes.push_back(box);
+  }
+  std::vector<char> keep(list.index.size(), 1);
+#pragma omp parallel for schedule(dynamic, 256) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d xi = positions[i].head<2>();
+    for (std::size_t s = 0; s < partitions.size(); ++s) {
+      if (!boxes[s].contains(xi)) continue;
+      for (int k = list.begin(i); k < list.end(i); ++k) {
+        const Eigen::Vector3d xj =
+            positions[i] + periodic.wrap(positions[list.index[k]] - positions[i]);
+        if (crosses_partition(positions[i], xj, partitions[s])) keep[k] = 0;
+      }
+    }
+  }
+  // Compaction in order (serial): deterministic.
+  std::int64_t write = 0;
+  std::int64_t begin = 0;
+  for (int i = 0; i < n; ++i) {
+    const std::int64_t end = list.offset[i + 1];
+    for (std::int64_t k = begin; k < end; ++k) {
+      if (!keep[k]) continue;
+      list.index[write] = list.index[k];
+      list.distance[write] = list.distance[k];
+      ++write;
+    }
+    begin = end;
+    list.offset[i + 1] = write;
+  }
+  list.index.resize(write);
+  list.distance.resize(write);
+}
+
+OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings settings)
+    : system_(system),
+      settings_(settings),
+      velocity_(settings.velocity),
+      rows_(settings.inflow_rows),
+      last_dissolution_time_(system.time()) {
+  const OpenBoundarySettings& s = settings_;
+  if (system.parameters().dimension != 2) {
+    throw std::invalid_argument("OpenBoundaries: 2D only");
+  }
+  if (s.block_rows < 1 || s.inflow_rows < 1 || s.inflow_rows > s.block_rows) {
+    throw std::invalid_argument("OpenBoundaries: need 1 <= inflow_rows <= block_rows");
+  }
+  const double l0 = system.parameters().particle_spacing;
+  if (s.level_window <= 0.0) settings_.level_window = 3.0 * l0;
+  if (s.control == OpenBoundarySettings::Control::discharge) {
+    if (!(s.discharge > 0.0)) throw std::invalid_argument("OpenBoundaries: discharge must be > 0");
+    velocity_ = s.discharge / (rows_ * l0);
+  }
+  if (s.control == OpenBoundarySettings::Control::level) {
+    if (!(s.target_level > 0.0)) throw std::invalid_argument("OpenBoundaries: target_level > 0");
+    rows_ = std::clamp(static_cast<int>(std::lround(s.target_level / l0)), 1, s.block_rows);
+  }
+  for (int i = 0; i < system.particle_count(); ++i) {
+    const Eigen::Vector3d& x = system.positions()[i];
+    if (system.kinds()[i] == ParticleKind::wall && x.x() < s.inflow_x && x.y() > s.bed_y) {
+      block_.push_back(i);
+    }
+  }
+  if (block_.empty()) throw std::invalid_argument("OpenBoundaries: no moving wall block found");
+  set_block_velocity();
+}
+
+void OpenBoundaries::set_block_velocity() {
+  for (int i : block_) system_.set_velocity(i, Eigen::Vector3d(velocity_, 0.0, 0.0));
+}
+
+int OpenBoundaries::take_from_pool() {
+  const auto& kinds = system_.kinds();
+  const int n = system_.particle_count();
+  for (int k = 0; k < n; ++k) {
+    const int i = (pool_cursor_ + k) % n;
+    if (kinds[i] == ParticleKind::inactive) {
+      pool_cursor_ = (i + 1) % n;
+      return i;
+    }
+  }
+  throw std::runtime_error("OpenBoundaries: particle pool empty (add pool particles to the scene)");
+}
+
+int OpenBoundaries::pool_size() const {
+  return static_cast<int>(
+      std::count(system_.kinds().begin(), system_.kinds().end(), ParticleKind::inactive));
+}
+
+double OpenBoundaries::inflow_volume() const {
+  const double l0 = system_.parameters().particle_spacing;
+  return static_cast<double>(dissolved_total_) * l0 * l0;
+}
+
+BoundaryUpdate OpenBoundaries::update() {
+  const OpenBoundarySettings& s = settings_;
+  const double l0 = system_.parameters().particle_spacing;
+  BoundaryUpdate result;
+  // Free outflow: particles beyond the outflow line go to the pool.
+  for (int i = 0; i < system_.particle_count(); ++i) {
+    if (system_.kinds()[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d x = system_.positions()[i];
+    if (x.x() > s.outflow_x || x.y() < s.outflow_y_min) {
+      system_.set_particle(i, ParticleKind::inactive, x, Eigen::Vector3d::Zero());
+      ++result.recycled;
+    }
+  }
+  recycled_total_ += result.recycled;
+  pool_cursor_ = 0;  // reuse the lowest free slots first
+
+  // Soluble moving wall: columns whose particles passed the inflow line dissolve.
+  std::vector<int> passed, kept;
+  for (int i : block_) {
+    (system_.positions()[i].x() >= s.inflow_x ? passed : kept).push_back(i);
+  }
+  if (passed.empty()) return result;
+  // Level just downstream of the inflow line (seed 001: highest water particle in a short
+  // section), measured before the new fluid is released.
+  double top = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < system_.particle_count(); ++i) {
+    if (system_.kinds()[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& x = system_.positions()[i];
+    if (x.x() >= s.inflow_x && x.x() <= s.inflow_x + s.level_window) top = std::max(top, x.y());
+  }
+  level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_y : 0.0;
+  const double now = system_.time();
+  switch (s.control) {
+    case OpenBoundarySettings::Control::velocity:
+      break;
+    case OpenBoundarySettings::Control::discharge:
+      rows_ = std::clamp(static_cast<int>(std::lround(level_ / l0)), 1, s.block_rows);
+      velocity_ = s.discharge / (rows_ * l0);
+      break;
+    case OpenBoundarySettings::Control::level:
+      velocity_ += s.level_gain * (s.target_level - level_) * (now - last_dissolution_time_);
+      velocity_ = std::clamp(velocity_, s.min_velocity, s.max_velocity);
+      break;
+  }
+  last_dissolution_time_ = now;
+  // Dissolve: rows below rows_ become fluid, the others return to the pool. Dissolution uses
+  // the velocity the column travelled with, so the released volume is exactly rows_ l0 x l0.
+  double column_x = std::numeric_limits<double>::infinity();
+  for (int i : kept) column_x = std::min(column_x, system_.positions()[i].x());
+  std::vector<double> passed_x;
+  for (int i : passed) passed_x.push_back(system_.positions()[i].x());
+  std::sort(passed_x.begin(), passed_x.end());
+  int columns = 1;
+  for (std::size_t k = 1; k < passed_x.size(); ++k) {
+    if (passed_x[k] - passed_x[k - 1] > 0.5 * l0) ++columns;
+  }
+  for (int i : passed) {
+    const Eigen::Vector3d x = system_.positions()[i];
+    const Eigen::Vector3d u = system_.velocities()[i];
+    const int row = static_cast<int>(std::floor((x.y() - s.bed_y) / l0));
+    if (row < rows_) {
+      system_.set_particle(i, ParticleKind::fluid, x, u);
+      ++result.dissolved;
+    } else {
+      system_.set_particle(i, ParticleKind::inactive, x, Eigen::Vector3d::Zero());
+    }
+  }
+  dissolved_total_ += result.dissolved;
+  // New columns behind the block, one per dissolved column, l0 apart.
+  if (!std::isfinite(column_x)) column_x = passed_x.front();
+  block_ = kept;
+  for (int c = 1; c <= columns; ++c) {
+    const double x = column_x - c * l0;
+    for (int row = 0; row < s.block_rows; ++row) {
+      const int i = take_from_pool();
+      system_.set_particle(i, ParticleKind::wall,
+                           Eigen::Vector3d(x, s.bed_y + (row + 0.5) * l0, 0.0),
+                           Eigen::Vector3d(velocity_, 0.0, 0.0));
+      block_.push_back(i);
+      ++result.created;
+    }
+  }
+  set_block_velocity();
+  return result;
+}
+
+}  // namespace cosim::mps
