@@ -109,10 +109,11 @@ DebrisConfig parse_config(scenario::Section& section, double scene_output_interv
   }
   config.settle_time = gate.number("settle_time", config.settle_time, Range::non_negative());
 
-  // Elements leaving the flume far downstream or falling out are errors, not silent losses.
+  // Debris that passes the dam leaves the flume's end and falls freely; only elements thrown
+  // sideways or upstream out of the flume, or falling for minutes, are errors.
   const double margin = 1.0;
-  p.domain_min = Eigen::Vector3d(-margin, -margin, -margin);
-  p.domain_max = Eigen::Vector3d(config.flume.length + 10 * margin, config.flume.width + margin,
+  p.domain_min = Eigen::Vector3d(-margin, -margin, -100.0);
+  p.domain_max = Eigen::Vector3d(config.flume.length + 100.0, config.flume.width + margin,
                                  config.flume.wall_height + 10 * margin);
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());

@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Core>
+
 #include "command.hpp"
 
 namespace cosim::testing {
