@@ -193,8 +193,10 @@ RunResult Coupler::run(ProcessGroup& processes) {
       if (scene_.coupling.adaptive_window && next_stable_dt_ > 0.0) {
         dt = std::min(dt, next_stable_dt_);
       }
-      // Land exactly on the scene's duration.
-      dt = std::min(dt, scene_.duration - time);
+      // Land on the scene's duration; a remainder within round-off of the window is the window
+      // (the window length, not a value 1e-19 shorter, is what the solvers were given before).
+      const double remaining = scene_.duration - time;
+      if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
       if (dt <= scene_.duration * 1e-12) break;
       run_window(processes, index, time, dt);
       // Fixed windows: no round-off drift over long runs.

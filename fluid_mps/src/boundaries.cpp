@@ -82,7 +82,8 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
     throw std::invalid_argument("OpenBoundaries: need 1 <= inflow_rows <= block_rows");
   }
   const double l0 = system.parameters().particle_spacing;
-  if (s.level_window <= 0.0) settings_.level_window = 3.0 * l0;
+  if (s.level_window <= 0.0) settings_.level_window = 8.0 * l0;
+  if (s.level_offset < 0.0) settings_.level_offset = 2.0 * l0;
   if (s.control == OpenBoundarySettings::Control::discharge) {
     if (!(s.discharge > 0.0)) throw std::invalid_argument("OpenBoundaries: discharge must be > 0");
     velocity_ = s.discharge / (rows_ * l0);
@@ -150,15 +151,23 @@ BoundaryUpdate OpenBoundaries::update() {
     (system_.positions()[i].x() >= s.inflow_x ? passed : kept).push_back(i);
   }
   if (passed.empty()) return result;
-  // Level just downstream of the inflow line (seed 001: highest water particle in a short
-  // section), measured before the new fluid is released.
+  // Level just downstream of the inflow line (seed 001 section 2.2(3)), measured before the new
+  // fluid is released.
+  const double x0 = s.inflow_x + s.level_offset, x1 = x0 + s.level_window;
   double top = -std::numeric_limits<double>::infinity();
+  int inside = 0;
   for (int i = 0; i < system_.particle_count(); ++i) {
     if (system_.kinds()[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = system_.positions()[i];
-    if (x.x() >= s.inflow_x && x.x() <= s.inflow_x + s.level_window) top = std::max(top, x.y());
+    if (x.x() < x0 || x.x() >= x1 || x.y() < s.bed_y) continue;
+    top = std::max(top, x.y());
+    ++inside;
   }
-  level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_y : 0.0;
+  if (s.level_measure == OpenBoundarySettings::LevelMeasure::highest) {
+    level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_y : 0.0;
+  } else {
+    level_ = inside * l0 * l0 / s.level_window;
+  }
   const double now = system_.time();
   switch (s.control) {
     case OpenBoundarySettings::Control::velocity:

@@ -37,8 +37,8 @@ struct OpenBoundarySettings {
   int block_rows = 10;
   // How the inflow is set.
   //  velocity:  fixed wall velocity `velocity` and `inflow_rows` rows per column;
-  //  discharge: seed 001's automatic level adjustment: at each dissolution the highest fluid
-  //             particle within `level_window` downstream of inflow_x gives the level h; the next
+  //  discharge: seed 001's automatic level adjustment: at each dissolution the water level h
+  //             just downstream of inflow_x is measured (see level_measure); the next
   //             column releases n = round(h / l0) rows (1..block_rows) and the wall moves at
   //             U = discharge / (n l0), so the discharge per width stays `discharge`;
   //  level:     keeps the level at `target_level`: n = round(target_level / l0) rows and an
@@ -50,8 +50,15 @@ struct OpenBoundarySettings {
   int inflow_rows = 5;
   double discharge = 0.0;     // q per unit width [m^2/s] (2D)
   double target_level = 0.0;  // [m] above bed_y
-  double level_window = 0.0;  // [m]; 0: 3 l0 (seed 001 uses 3 % of its domain length)
-  double level_gain = 1.0;    // [1/s]
+  // Level measurement window [inflow_x + level_offset, + level_window] (defaults 2 l0 and 8 l0;
+  // seed 001 uses a short section of 3 % of its domain length). mean_depth: fluid area in the
+  // window / window length (default: unbiased, smooth); highest: highest fluid particle + l0/2
+  // (seed 001's choice; splashes bias it upwards and the just-released column dominates it).
+  enum class LevelMeasure { mean_depth, highest };
+  LevelMeasure level_measure = LevelMeasure::mean_depth;
+  double level_offset = -1.0;  // [m]; < 0: 2 l0
+  double level_window = 0.0;   // [m]; <= 0: 8 l0
+  double level_gain = 1.0;     // [1/s]
   double min_velocity = 0.0;
   double max_velocity = 2.0;
   // Free outflow: fluid particles with x > outflow_x or y < outflow_y_min leave the flow and are
