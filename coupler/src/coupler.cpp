@@ -63,7 +63,11 @@ void Coupler::handshake(ProcessGroup& processes) {
   auto last_broadcast = Clock::now() - std::chrono::hours(1);
   const auto start = Clock::now();
   while (!pending.empty()) {
-    if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
+    // Fast at first; a participant still initialising after a few seconds is asked less often.
+    const double interval =
+        seconds_since(start) < 2.0 ? scene_.coupling.resend_interval
+                                   : std::max(scene_.coupling.resend_interval, 0.5);
+    if (seconds_since(last_broadcast) >= interval) {
       bus_->publish_window(Stamp{0, 0.0, 0.0}, window_t::COMMAND_HANDSHAKE, scene_.total_windows());
       last_broadcast = Clock::now();
     }
@@ -79,10 +83,19 @@ void Coupler::handshake(ProcessGroup& processes) {
       if (status.state == status_t::STATE_READY) std::erase(pending, status.header.sender);
     }
     check_processes(processes, "start-up");
+    // A participant still building its initial state (packing debris, say) sends heartbeats:
+    // it may take as long as it needs while it keeps them coming. Only a participant never
+    // heard from within the start-up timeout is reported.
     check_silence(pending, "start-up");
     if (seconds_since(start) > options_.startup_timeout) {
-      throw Failure(fmt::format("participant(s) {} did not become ready within {:.0f} s",
-                                fmt::join(pending, ", "), options_.startup_timeout));
+      std::vector<std::string> never_heard;
+      for (const auto& name : pending) {
+        if (!bus_->last_heard(name)) never_heard.push_back(name);
+      }
+      if (!never_heard.empty()) {
+        throw Failure(fmt::format("participant(s) {} did not start within {:.0f} s",
+                                  fmt::join(never_heard, ", "), options_.startup_timeout));
+      }
     }
   }
 }

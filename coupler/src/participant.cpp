@@ -97,7 +97,11 @@ Window Participant::next_window() {
       const int64_t index = message.header.window;
       switch (message.command) {
         case cosim_msgs::window_t::COMMAND_HANDSHAKE:
-          publish_state(cosim_msgs::status_t::STATE_READY, 0, 0.0, "");
+          // Handshakes queued up while a long initialisation ran need one answer, not one each.
+          if (seconds_since(last_ready_) >= options_.resend_interval) {
+            publish_state(cosim_msgs::status_t::STATE_READY, 0, 0.0, "");
+            last_ready_ = Clock::now();
+          }
           break;
         case cosim_msgs::window_t::COMMAND_ABORT:
           throw CouplingError(fmt::format("the coupler aborted the run: {}", message.reason));

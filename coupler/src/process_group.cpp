@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/prctl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -52,6 +53,8 @@ void ProcessGroup::start(const std::string& name, const std::vector<std::string>
     // Child: its own process group so a terminal Ctrl-C reaches the launcher, which then stops
     // the solvers in order.
     setpgid(0, 0);
+    // A launcher killed without cleaning up must not leave solvers computing for nobody.
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
     dup2(log_fd, STDOUT_FILENO);
     dup2(log_fd, STDERR_FILENO);
     execv(argv[0], argv.data());

@@ -87,6 +87,7 @@ class Participant {
   double wait_seconds_ = 0.0;
   int64_t total_steps_ = 0;
   std::chrono::steady_clock::time_point started_;
+  std::chrono::steady_clock::time_point last_ready_{};
   std::atomic<bool> stop_heartbeat_{false};
   std::atomic<int64_t> heartbeat_window_{-1};
   std::thread heartbeat_;
