@@ -25,7 +25,8 @@ bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
 
 void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
                                 const std::vector<PartitionSegment>& partitions,
-                                const PeriodicBoundary& periodic) {
+                                const PeriodicBoundary& periodic,
+                                const std::vector<ParticleKind>* kinds) {
   if (partitions.empty()) return;
   const int n = static_cast<int>(list.offset.size()) - 1;
   // Segments near each particle: boxes of the segments grown by the list radius.
@@ -43,7 +44,12 @@ void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Ve
     const Eigen::Vector2d xi = positions[i].head<2>();
     for (std::size_t s = 0; s < partitions.size(); ++s) {
       if (!boxes[s].contains(xi)) continue;
+      const bool i_fluid = !kinds || (*kinds)[i] == ParticleKind::fluid;
+      if (partitions[s].keep_walls && !i_fluid) continue;
       for (int k = list.begin(i); k < list.end(i); ++k) {
+        if (partitions[s].keep_walls && kinds && (*kinds)[list.index[k]] != ParticleKind::fluid) {
+          continue;
+        }
         const Eigen::Vector3d xj =
             positions[i] + periodic.wrap(positions[list.index[k]] - positions[i]);
         if (crosses_partition(positions[i], xj, partitions[s])) keep[k] = 0;

@@ -134,7 +134,7 @@ void FluidSystem::initialise() {
   NeighbourGrid grid = active_grid(p, positions_, kinds_, re_n, re_n, include);
   grid.build(positions_, include.empty() ? nullptr : &include);
   NeighbourList list = grid.neighbours(positions_, re_n);
-  remove_partition_crossings(list, positions_, p.partitions, p.periodic);
+  remove_partition_crossings(list, positions_, p.partitions, p.periodic, &kinds_);
   number_densities_.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = list.begin(static_cast<int>(i)); k < list.end(static_cast<int>(i)); ++k) {
@@ -223,7 +223,8 @@ StepReport FluidSystem::step(double dt) {
   auto build_list = [&](const std::vector<Eigen::Vector3d>& x, double radius) {
     grid.build(x, included);
     NeighbourList result = grid.neighbours(x, radius);
-    remove_partition_crossings(result, x, p.partitions, periodic);  // seed 001 section 2.2(1)
+    remove_partition_crossings(result, x, p.partitions, periodic,
+                               &kinds_);  // seed 001 section 2.2(1)
     return result;
   };
   // Constant streamwise pressure difference of a periodic channel as a body force (seed 000

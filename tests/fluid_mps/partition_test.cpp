@@ -40,67 +40,97 @@ TEST(MpsPartition, ListFilterKeepsOrderAndDropsCrossingPairs) {
 namespace {
 
 // Tank 0.3 m x 0.25 m (l0 = 0.01): water 0.2 m deep on x < 0.13, a thin partition of two wall
-// columns (x centres 0.135 and 0.145), the right side x > 0.15 dry. The partition segment runs
-// along x = 0.14 between the columns, from under the bed to the partition top at y = 0.25.
-ParticleSet partitioned_tank(MpsParameters& p) {
+// columns (x centres 0.135 and 0.145), water `right_depth` deep on x > 0.15 (0: dry). The
+// partition segment runs along x = 0.14 between the columns, from under the bed to the top.
+ParticleSet partitioned_tank(MpsParameters& p, double right_depth) {
   const double l0 = p.particle_spacing;
   ParticleSet set = dam_break(p, 0.13, 0.2, 0.3, 0.25);
   for (int iy = 0; iy < 25; ++iy)
     for (double x : {0.135, 0.145})
       set.add(Eigen::Vector3d(x, (iy + 0.5) * l0, 0.0), ParticleKind::wall);
+  for (int iy = 0; iy < std::lround(right_depth / l0); ++iy)
+    for (int ix = 15; ix < 30; ++ix)
+      set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, 0.0), ParticleKind::fluid);
   return set;
 }
 
-}  // namespace
+struct PartitionRun {
+  double dry_face_pressure = 0.0;  // max pressure of the right wall column (dry side)
+  double max_left_x = 0.0;         // rightmost fluid particle that started on the left
+  double left_pressure = 0.0;      // time-averaged, 1 l0 from the partition, y = 0.05 m
+  double right_pressure = 0.0;
+};
 
-// Without the exclusion the water sees the dry face of the partition (2 l0 away, inside the
-// Laplacian radius) as free surface and its pressure near the wall drops; with it the water
-// stays hydrostatic, no particle passes and the dry face carries no pressure.
-TEST(MpsPartition, ThinWallHoldsWaterWithoutPressureLeak) {
+PartitionRun run_partitioned(const MpsParameters& parameters, double right_depth) {
+  MpsParameters q = parameters;
+  FluidSystem system(q, partitioned_tank(q, right_depth));
+  std::vector<char> left(system.particle_count(), 0);
+  for (int i = 0; i < system.particle_count(); ++i) {
+    left[i] = system.kinds()[i] == ParticleKind::fluid && system.positions()[i].x() < 0.13;
+  }
+  PartitionRun r;
+  double sum_left = 0.0, sum_right = 0.0;
+  int samples = 0;
+  while (system.time() < 0.8) {
+    system.step(system.stable_dt());
+    for (int i = 0; i < system.particle_count(); ++i) {
+      const Eigen::Vector3d& x = system.positions()[i];
+      if (left[i]) r.max_left_x = std::max(r.max_left_x, x.x());
+      if (system.kinds()[i] == ParticleKind::wall && x.x() > 0.14 && x.x() < 0.15 && x.y() > 0.0) {
+        r.dry_face_pressure = std::max(r.dry_face_pressure, system.pressures()[i]);
+      }
+    }
+    if (system.time() > 0.4) {
+      sum_left += mean_pressure_at(system, Eigen::Vector3d(0.12, 0.05, 0.0), 0.015);
+      sum_right += mean_pressure_at(system, Eigen::Vector3d(0.16, 0.05, 0.0), 0.015);
+      ++samples;
+    }
+  }
+  r.left_pressure = sum_left / samples;
+  r.right_pressure = sum_right / samples;
+  return r;
+}
+
+MpsParameters partition_parameters(bool exclusion) {
   MpsParameters p;
   p.particle_spacing = 0.01;
   p.max_dt = 1e-3;
   p.collision_distance_ratio = 1.0;
   p.collision_restitution = 0.2;
   p.radius_gradient_over_l0 = 4.0;
-  MpsParameters with = p;
-  with.partitions.push_back({{0.14, -0.1}, {0.14, 0.25}});
-  const double expected = p.density * 9.81 * 0.1;
-  struct Result {
-    double dry_face_pressure = 0.0, max_fluid_x = 0.0, near_wall_pressure = 0.0;
-  };
-  auto run = [](const MpsParameters& parameters) {
-    MpsParameters q = parameters;
-    FluidSystem system(q, partitioned_tank(q));
-    Result r;
-    double sum = 0.0;
-    int samples = 0;
-    while (system.time() < 0.8) {
-      system.step(system.stable_dt());
-      for (int i = 0; i < system.particle_count(); ++i) {
-        const Eigen::Vector3d& x = system.positions()[i];
-        if (system.kinds()[i] == ParticleKind::fluid)
-          r.max_fluid_x = std::max(r.max_fluid_x, x.x());
-        if (system.kinds()[i] == ParticleKind::wall && x.x() > 0.14 && x.x() < 0.15 &&
-            x.y() > 0.0) {
-          r.dry_face_pressure = std::max(r.dry_face_pressure, system.pressures()[i]);
-        }
-      }
-      if (system.time() > 0.4) {
-        sum += mean_pressure_at(system, Eigen::Vector3d(0.12, 0.1, 0.0), 0.015);
-        ++samples;
-      }
-    }
-    r.near_wall_pressure = sum / samples;
-    return r;
-  };
-  const Result tight = run(with), leaky = run(p);
-  std::cout << "[partition] with exclusion: dry-face max pressure " << tight.dry_face_pressure
-            << " Pa, rightmost fluid x " << tight.max_fluid_x << " m, pressure 1 l0 from the wall "
-            << "at depth 0.1 m " << tight.near_wall_pressure << " Pa (rho g h " << expected
-            << "); without: " << leaky.near_wall_pressure << " Pa, dry face "
-            << leaky.dry_face_pressure << " Pa, rightmost fluid x " << leaky.max_fluid_x << "\n";
+  if (exclusion) p.partitions.push_back({{0.14, -0.1}, {0.14, 0.25}});
+  return p;
+}
+
+}  // namespace
+
+// Pools at different levels on both sides of a partition two particles thick (seed 001's
+// fishway situation): without the exclusion the Laplacian (4 l0) couples the water 3 l0 apart
+// across the partition and the pressures leak; with it each side stays hydrostatic.
+TEST(MpsPartition, ThinWallSeparatesPoolsAtDifferentLevels) {
+  const double rho_g = 1000.0 * 9.81;
+  const PartitionRun tight = run_partitioned(partition_parameters(true), 0.1);
+  const PartitionRun leaky = run_partitioned(partition_parameters(false), 0.1);
+  std::cout << "[partition, two pools] at y=0.05 m, 1 l0 from the wall: left "
+            << tight.left_pressure << " Pa (rho g h " << rho_g * 0.15 << "), right "
+            << tight.right_pressure << " Pa (" << rho_g * 0.05 << "); without exclusion left "
+            << leaky.left_pressure << " right " << leaky.right_pressure
+            << " Pa; rightmost left-side particle " << tight.max_left_x << " m\n";
+  EXPECT_NEAR(tight.left_pressure, rho_g * 0.15, 0.03 * rho_g * 0.15);
+  EXPECT_NEAR(tight.right_pressure, rho_g * 0.05, 0.025 * rho_g * 0.05);
+  // The leak the exclusion removes: the shallow pool's pressure is off by more than that.
+  EXPECT_GT(std::abs(leaky.right_pressure - rho_g * 0.05), 0.025 * rho_g * 0.05);
+  EXPECT_LT(tight.max_left_x, 0.14);
+}
+
+// Dry side: no particle passes and the dry face carries no pressure.
+TEST(MpsPartition, ThinWallHoldsWaterFromDrySide) {
+  const double rho_g = 1000.0 * 9.81;
+  const PartitionRun tight = run_partitioned(partition_parameters(true), 0.0);
+  std::cout << "[partition, dry side] dry-face max pressure " << tight.dry_face_pressure
+            << " Pa, rightmost fluid x " << tight.max_left_x << " m, left pressure "
+            << tight.left_pressure << " Pa (rho g h " << rho_g * 0.15 << ")\n";
   EXPECT_EQ(tight.dry_face_pressure, 0.0);
-  EXPECT_LT(tight.max_fluid_x, 0.13);
-  EXPECT_NEAR(tight.near_wall_pressure, expected, 0.03 * expected);
+  EXPECT_LT(tight.max_left_x, 0.13);
+  EXPECT_NEAR(tight.left_pressure, rho_g * 0.15, 0.03 * rho_g * 0.15);
 }

@@ -116,6 +116,7 @@ int main(int argc, char** argv) {
     };
 
     const std::vector<Eigen::Vector3d> no_drag(node_count, Eigen::Vector3d::Zero());
+    std::vector<double> water(node_count, 1.0);
     double next_output = 0.0;
     int64_t node_substeps = 0;
     int most_substeps = 0, most_newton_iterations = 0;
@@ -155,6 +156,11 @@ int main(int argc, char** argv) {
         continue;
       }
       const auto [begin, end] = link.ambient(window);
+      // Emergent parts of a plant (water fraction 0) take no drag and no buoyancy.
+      for (std::size_t k = 0; k < node_count; ++k) {
+        water[k] = 0.5 * (begin.water_fraction[k] + end.water_fraction[k]);
+      }
+      field.set_water_fraction(water);
       const auto step = field.advance(window.dt, begin.velocity, end.velocity);
       node_substeps += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count);
       most_substeps = std::max(most_substeps, step.substeps);

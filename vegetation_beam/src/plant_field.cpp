@@ -92,6 +92,8 @@ PlantField::PlantField(std::vector<PlantSpec> plants, BeamParameters parameters)
       positions_.push_back(spec.base + i * l0 * spec.direction);
       node_mass_.push_back(mass_density * volume);
       body_forces_.push_back((spec.density - p.fluid_density) * volume * p.gravity);
+      plant_weight_.push_back(spec.density * volume * p.gravity);
+      displaced_weight_.push_back(p.fluid_density * volume * p.gravity);
       contact_radius_.push_back(plant.contact_radius);
       node_plant_.push_back(static_cast<int>(index));
     }
@@ -105,6 +107,7 @@ PlantField::PlantField(std::vector<PlantSpec> plants, BeamParameters parameters)
   accelerations_.assign(n, Eigen::Vector3d::Zero());
   external_forces_.assign(n, Eigen::Vector3d::Zero());
   window_mean_drag_.assign(n, Eigen::Vector3d::Zero());
+  water_fraction_.assign(n, 1.0);
   forces_.assign(n, Eigen::Vector3d::Zero());
   drag_.assign(n, Eigen::Vector3d::Zero());
   residual_.assign(n, Eigen::Vector3d::Zero());
@@ -271,8 +274,9 @@ void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector
       const int lo = std::max(i - 1, 0), hi = std::min(i + 1, links);
       const Eigen::Vector3d tangent = (x[first + hi] - x[first + lo]).normalized();
       const double share = (i == 0 || i == links) ? 0.5 * l0 : l0;
-      const NodeDrag d =
-          node_drag(tangent, ambient[first + i], v[first + i], plant.drag_factor * share);
+      // Nodes out of the water (fraction 0) feel no drag.
+      const NodeDrag d = node_drag(tangent, ambient[first + i], v[first + i],
+                                   plant.drag_factor * share * water_fraction_[first + i]);
       drag[first + i] = d.force;
       force[first + i] += d.force;
       add(i, i, d.damping, damping_weight);
@@ -339,10 +343,11 @@ int PlantField::substep(double dt, const std::vector<Eigen::Vector3d>& ambient) 
         const int lo = plant.first + std::max(i - 1, 0);
         const int hi = plant.first + std::min(i + 1, plant.links);
         const double share = (i == 0 || i == plant.links) ? 0.5 : 1.0;
-        drag_[plant.first + i] =
-            node_drag((positions_[hi] - positions_[lo]).normalized(), ambient[plant.first + i],
-                      Eigen::Vector3d::Zero(), share * plant.link_length * plant.drag_factor)
-                .force;
+        drag_[plant.first + i] = node_drag((positions_[hi] - positions_[lo]).normalized(),
+                                           ambient[plant.first + i], Eigen::Vector3d::Zero(),
+                                           share * plant.link_length * plant.drag_factor *
+                                               water_fraction_[plant.first + i])
+                                     .force;
       }
     }
     return 0;
@@ -496,6 +501,21 @@ WindowReport PlantField::advance(double window_dt,
   }
   for (std::size_t k = 0; k < n; ++k) window_mean_drag_[k] = impulse[k] / window_dt;
   return report;
+}
+
+void PlantField::set_water_fraction(const std::vector<double>& fraction) {
+  if (fraction.size() != water_fraction_.size()) {
+    throw std::invalid_argument("vegetation_beam: water fraction needs one value per node (" +
+                                std::to_string(water_fraction_.size()) + "), got " +
+                                std::to_string(fraction.size()));
+  }
+  for (std::size_t k = 0; k < fraction.size(); ++k) {
+    const double wet = std::clamp(fraction[k], 0.0, 1.0);
+    water_fraction_[k] = wet;
+    // Buoyancy acts on the submerged share only.
+    body_forces_[k] = plant_weight_[k] - wet * displaced_weight_[k];
+  }
+  accelerations_valid_ = false;
 }
 
 }  // namespace cosim::vegetation

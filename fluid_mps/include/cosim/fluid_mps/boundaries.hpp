@@ -17,9 +17,11 @@ namespace cosim::mps {
 // segment (strictly opposite sides; a pair passing exactly over a segment end is dropped too).
 // Only particles within the list radius of a segment are tested. Keeps the order, so loops over
 // the list stay deterministic. `periodic` gives the minimum-image partner position.
+// `kinds` (optional) enables PartitionSegment::keep_walls; without it every crossing pair goes.
 void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
                                 const std::vector<PartitionSegment>& partitions,
-                                const PeriodicBoundary& periodic = PeriodicBoundary{});
+                                const PeriodicBoundary& periodic = PeriodicBoundary{},
+                                const std::vector<ParticleKind>* kinds = nullptr);
 
 // True if the segment p-q crosses the partition segment (2D, x-y plane).
 bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,

@@ -43,10 +43,14 @@ struct PeriodicBoundary {
 };
 
 // Thin partition wall of seed 001 section 2.2(1): two particles whose connecting segment crosses
-// a partition segment are not neighbours in any operator (x-y plane; z is ignored).
+// a partition segment are not neighbours in any operator (x-y plane; z is ignored). Place the
+// segment along the middle of the partition's wall particles. With keep_walls (default), as in
+// seed 001, only fluid-fluid pairs are cut: the partition's wall and dummy particles are seen
+// from both sides, so a partition two particles thick still supports the water on each side.
 struct PartitionSegment {
   Eigen::Vector2d a = Eigen::Vector2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  bool keep_walls = true;
 };
 
 // Physical and numerical parameters. Equation numbers refer to seed 001 (Maeno et al.) unless

@@ -95,6 +95,9 @@ class PlantField {
 
   // Constant extra force per node (all nodes; base entries are ignored), e.g. a tip load.
   void set_external_forces(std::vector<Eigen::Vector3d> forces);
+  // Per node, the submerged share in [0, 1] (from the fluid's samples): drag and buoyancy act
+  // on that share; the default is fully submerged. Added mass is kept (it sets the step).
+  void set_water_fraction(const std::vector<double>& fraction);
   // Replaces the state (e.g. an initial deflection); accelerations are recomputed lazily.
   void set_state(std::vector<Eigen::Vector3d> positions, std::vector<Eigen::Vector3d> velocities);
 
@@ -157,6 +160,8 @@ class PlantField {
   std::vector<Eigen::Vector3d> positions_, velocities_, accelerations_;
   std::vector<Eigen::Vector3d> initial_positions_;
   std::vector<Eigen::Vector3d> external_forces_, body_forces_;  // body: gravity minus buoyancy
+  std::vector<Eigen::Vector3d> plant_weight_, displaced_weight_;
+  std::vector<double> water_fraction_;  // per node, 1 submerged (drag and buoyancy act)
   std::vector<double> node_mass_, contact_radius_;
   std::vector<int> node_plant_;
   std::vector<Eigen::Vector3d> window_mean_drag_;
