@@ -9,6 +9,7 @@
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/coupler/process_main.hpp"
 #include "cosim/output/point_series.hpp"
+#include "cosim/vegetation_beam/canopy_metrics.hpp"
 #include "elastica.hpp"
 #include "vegetation_config.hpp"
 
@@ -16,8 +17,14 @@ namespace {
 
 using namespace cosim;
 
-output::PointFrame make_frame(const vegetation::PlantField& field) {
+output::PointFrame make_frame(const vegetation::PlantField& field,
+                              const std::vector<double>* initial_density = nullptr,
+                              double psi_radius = 0.0) {
   output::PointFrame frame;
+  if (initial_density) {
+    frame.scalars["psi"] = vegetation::vegetation_density_change(
+        vegetation::vegetation_number_density(field.positions(), psi_radius), *initial_density);
+  }
   frame.time = field.time();
   frame.positions = field.positions();
   frame.vectors["velocity"] = field.velocities();
@@ -107,6 +114,23 @@ int main(int argc, char** argv) {
       if (across.norm() > 0) streamwise = across.normalized();
     }
     std::vector<double> times, tip_streamwise, tip_height;
+    // Seed 000 section 4: density change psi in every frame, honami amplitude of every tip.
+    std::vector<double> initial_density;
+    vegetation::TipAmplitude amplitude(config.canopy ? field.plant_count() : 0);
+    if (config.canopy) {
+      initial_density =
+          vegetation::vegetation_number_density(field.positions(), config.canopy->psi_radius);
+    }
+    auto frame_of = [&](const vegetation::PlantField& plants) {
+      return config.canopy ? make_frame(plants, &initial_density, config.canopy->psi_radius)
+                           : make_frame(plants);
+    };
+    auto observe_canopy = [&] {
+      if (!config.canopy || field.time() < config.canopy->amplitude_from) return;
+      for (int plant = 0; plant < field.plant_count(); ++plant) {
+        amplitude.observe(plant, field.tip_displacement(plant).dot(config.canopy->streamwise));
+      }
+    };
     auto record_tip = [&] {
       const auto [first, last] = field.node_range(probe);
       const Eigen::Vector3d tip = field.positions()[last - 1] - field.positions()[first];
@@ -128,11 +152,19 @@ int main(int argc, char** argv) {
       context.maybe_inject_fault(window.index);
       if (window.finish) {
         if (writer.frame_count() == 0 || next_output <= field.time())
-          writer.write_frame(make_frame(field));
+          writer.write_frame(frame_of(field));
         writer.write_series("tip_streamwise_displacement", times, tip_streamwise);
         writer.write_series("tip_height", times, tip_height);
         coupler::MetricsReport report;
         report_metrics(config, field, times, tip_streamwise, tip_height, report);
+        if (config.canopy) {
+          report.value("mean_tip_amplitude", amplitude.mean_amplitude(), "m");
+          const auto psi = vegetation::vegetation_density_change(
+              vegetation::vegetation_number_density(field.positions(), config.canopy->psi_radius),
+              initial_density);
+          report.value("psi_min", *std::min_element(psi.begin(), psi.end()), "");
+          report.value("psi_max", *std::max_element(psi.begin(), psi.end()), "");
+        }
         report.info()["plants"] = field.plant_count();
         report.info()["nodes"] = node_count;
         report.info()["node_substeps"] = node_substeps;
@@ -149,7 +181,7 @@ int main(int argc, char** argv) {
       }
       if (window.index == 0) {
         record_tip();
-        writer.write_frame(make_frame(field));
+        writer.write_frame(frame_of(field));
         next_output = config.output_interval;
         link.publish_state(field.positions(), field.velocities(), no_drag);
         participant.done(0);
@@ -169,8 +201,9 @@ int main(int argc, char** argv) {
       for (const auto& drag : field.window_mean_drag()) last_drag_impulse += drag * window.dt;
       drag_impulse += last_drag_impulse;
       record_tip();
+      observe_canopy();
       if (field.time() >= next_output - 1e-12 * std::max(1.0, next_output)) {
-        writer.write_frame(make_frame(field));
+        writer.write_frame(frame_of(field));
         next_output += config.output_interval;
       }
       link.publish_state(field.positions(), field.velocities(), field.window_mean_drag());

@@ -71,6 +71,17 @@ VegetationConfig parse_config(scenario::Section& section, double scene_output_in
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());
 
+  if (section.has("canopy")) {
+    auto canopy = section.child("canopy");
+    CanopySettings settings;
+    settings.psi_radius =
+        canopy.number("psi_radius", 7.0 * config.plants.front().width, Range::positive());
+    settings.streamwise = canopy.vector3("streamwise", settings.streamwise);
+    if (settings.streamwise.norm() == 0.0) canopy.fail("streamwise", "must not be zero");
+    settings.streamwise.normalize();
+    settings.amplitude_from = canopy.number("amplitude_from", 0.0, Range::non_negative());
+    config.canopy = settings;
+  }
   if (section.has("reference")) {
     auto reference = section.child("reference");
     reference.choice("kind", {"elastica_uniform_flow"});

@@ -18,11 +18,20 @@ struct ElasticaReference {
   double average_over = 0.0;  // seconds at the end of the run over which the tip is averaged
 };
 
+// Canopy measures of seed 000 section 4: the vegetation density change psi (eq. 24) in the
+// output frames and the honami amplitude of every plant's tip.
+struct CanopySettings {
+  double psi_radius = 0.0;  // seed 000: 7 d_veg
+  Eigen::Vector3d streamwise = Eigen::Vector3d::UnitX();
+  double amplitude_from = 0.0;  // tip extremes are tracked from this time on [s]
+};
+
 struct VegetationConfig {
   std::vector<PlantSpec> plants;
   BeamParameters parameters;
   double output_interval = 0.0;
   std::optional<ElasticaReference> elastica_reference;
+  std::optional<CanopySettings> canopy;
 };
 
 // `output_interval` is the scene's default for the section's own `output_interval`.
