@@ -45,19 +45,56 @@ MpsParameters parse_parameters(scenario::Section& section) {
   return p;
 }
 
+OpenBoundarySettings parse_inflow(scenario::Section inflow) {
+  OpenBoundarySettings settings;
+  const std::string control =
+      inflow.text("control", "discharge", {"velocity", "discharge", "level"});
+  using Control = OpenBoundarySettings::Control;
+  settings.control = control == "velocity"    ? Control::velocity
+                     : control == "discharge" ? Control::discharge
+                                              : Control::level;
+  if (settings.control == Control::discharge) {
+    settings.discharge = inflow.number("discharge", Range::positive());
+  } else if (settings.control == Control::level) {
+    settings.target_level = inflow.number("target_level", Range::positive());
+    settings.level_gain = inflow.number("level_gain", settings.level_gain, Range::positive());
+  }
+  settings.velocity = inflow.number("velocity", settings.velocity, Range::non_negative());
+  settings.inflow_rows =
+      inflow.integer("inflow_rows", settings.inflow_rows, Range::between(1, 1000));
+  settings.min_velocity =
+      inflow.number("min_velocity", settings.min_velocity, Range::non_negative());
+  settings.max_velocity = inflow.number("max_velocity", settings.max_velocity, Range::positive());
+  return settings;
+}
+
 SceneSettings parse_scene(scenario::Section scene) {
   SceneSettings s;
-  s.kind = scene.choice("kind", {"dam_break", "still_water_tank"});
+  s.kind =
+      scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel", "open_channel"});
   if (s.kind == "dam_break") {
     s.column_width = scene.number("column_width", Range::positive());
     s.column_height = scene.number("column_height", Range::positive());
     s.tank_length = scene.number("tank_length", Range::positive());
     if (s.tank_length < s.column_width) scene.fail("tank_length", "shorter than the water column");
-  } else {
+    s.tank_height = scene.number("tank_height", Range::positive());
+  } else if (s.kind == "still_water_tank") {
     s.width = scene.number("width", Range::positive());
     s.depth = scene.number("depth", Range::positive());
+    s.tank_height = scene.number("tank_height", Range::positive());
+  } else if (s.kind == "periodic_channel") {
+    s.length = scene.number("length", Range::positive());
+    s.depth = scene.number("depth", Range::positive());
+    s.slope = scene.number("slope", 0.0, Range::between(-0.5, 0.5));
+    s.driving_pressure_drop = scene.number("driving_pressure_drop", 0.0);
+  } else {
+    s.length = scene.number("length", Range::positive());
+    s.depth = scene.number("initial_depth", Range::non_negative());
+    s.block_height = scene.number("block_height", Range::positive());
+    s.block_columns = scene.integer("block_columns", s.block_columns, Range::between(1, 100));
+    s.pool_particles = scene.integer("pool_particles", s.pool_particles, Range::between(1, 1e7));
+    s.inflow = parse_inflow(scene.child("inflow"));
   }
-  s.tank_height = scene.number("tank_height", Range::positive());
   s.wall_layers = scene.integer("wall_layers", s.wall_layers, Range::between(1, 10));
   s.dummy_layers = scene.integer("dummy_layers", s.dummy_layers, Range::between(0, 10));
   return s;
@@ -74,6 +111,31 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
   }
   // The initial scene is still described on restart: it documents the run and sets the tank.
   config.scene = parse_scene(section.child("scene"));
+  config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
+  for (auto& partition :
+       section.has("partitions") ? section.list("partitions") : std::vector<scenario::Section>{}) {
+    const auto a = partition.numbers("from");
+    const auto b = partition.numbers("to");
+    if (a.size() != 2) partition.fail("from", "expected [x, y]");
+    if (b.size() != 2) partition.fail("to", "expected [x, y]");
+    config.parameters.partitions.push_back(
+        PartitionSegment{{a[0], a[1]}, {b[0], b[1]}, partition.flag("keep_walls", true)});
+  }
+  if (section.has("observe")) {
+    auto observe = section.child("observe");
+    ObservationSettings observation;
+    const auto flat = observe.numbers("points");
+    if (flat.empty() || flat.size() % 3 != 0) {
+      observe.fail("points", "expected a flat list of x, y, z triples");
+    }
+    for (std::size_t i = 0; i < flat.size(); i += 3) {
+      observation.points.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
+    }
+    observation.radius =
+        observe.number("radius", 2.0 * config.parameters.particle_spacing, Range::positive());
+    observation.average_from = observe.number("average_from", 0.0, Range::non_negative());
+    config.observation = observation;
+  }
   const double spacing = config.parameters.particle_spacing;
   config.sample_radius = section.number("sample_radius", 2.0 * spacing, Range::positive());
   config.spanwise_spacing = section.number("spanwise_spacing", 1.0, Range::positive());
@@ -82,8 +144,15 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
   if (section.has("reference")) {
     auto reference = section.child("reference");
     ReferenceSettings r;
-    r.kind = reference.choice("kind", {"martin_moyce", "hydrostatic"});
-    if (r.kind == "martin_moyce") {
+    r.kind = reference.choice("kind", {"martin_moyce", "hydrostatic", "canopy_balance"});
+    if (r.kind == "canopy_balance") {
+      if (!config.observation) reference.fail("kind", "canopy_balance needs `observe` points");
+      if (config.scene.kind != "periodic_channel") {
+        reference.fail("kind", "canopy_balance needs a periodic_channel scene");
+      }
+      r.canopy_height = reference.number("canopy_height", Range::positive());
+      r.average_from = config.observation->average_from;
+    } else if (r.kind == "martin_moyce") {
       r.file = reference.existing_file("file");
       r.column_width = reference.number("column_width", Range::positive());
     } else {

@@ -7,17 +7,30 @@
 #include <string>
 #include <vector>
 
+#include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/scenario/section.hpp"
 
 namespace cosim::mps {
 
 struct SceneSettings {
-  std::string kind;                            // dam_break | still_water_tank
+  std::string kind;  // dam_break | still_water_tank | periodic_channel | open_channel
   double column_width = 0, column_height = 0;  // dam_break
-  double width = 0, depth = 0;                 // still_water_tank
+  double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
   double tank_length = 0, tank_height = 0;
+  double length = 0, slope = 0;      // channels: length; periodic_channel: slope = sin(theta)
+  double driving_pressure_drop = 0;  // periodic_channel: p(x_min) - p(x_max) [Pa]
+  double block_height = 0;           // open_channel: height of the soluble moving wall block
+  int block_columns = 4, pool_particles = 400;
   int wall_layers = 2, dummy_layers = 2;
+  OpenBoundarySettings inflow;  // open_channel
+};
+
+// Eulerian observation points (velocity and water presence), recorded every window.
+struct ObservationSettings {
+  std::vector<Eigen::Vector3d> points;
+  double radius = 0;
+  double average_from = 0;
 };
 
 struct RestartSettings {
@@ -26,14 +39,15 @@ struct RestartSettings {
 };
 
 struct ReferenceSettings {
-  std::string kind;  // martin_moyce | hydrostatic
+  std::string kind;  // martin_moyce | hydrostatic | canopy_balance
   std::filesystem::path file;
   double column_width = 0;           // martin_moyce: a
   std::vector<double> probe_depths;  // hydrostatic: below the still surface, at mid tank
   double still_depth = 0;
   double probe_x = 0;
-  double average_from = 0;  // hydrostatic: time averaging starts here
-  double probe_radius = 0;  // hydrostatic: particles within this radius are averaged [m]
+  double average_from = 0;   // hydrostatic: time averaging starts here
+  double probe_radius = 0;   // hydrostatic: particles within this radius are averaged [m]
+  double canopy_height = 0;  // canopy_balance: the inflection of u(y) is expected there
 };
 
 struct FluidConfig {
@@ -44,6 +58,7 @@ struct FluidConfig {
   double spanwise_spacing = 1;  // 2D: solids' forces are spread over this depth [m]
   double output_interval = 0;
   std::optional<ReferenceSettings> reference;
+  std::optional<ObservationSettings> observation;
 };
 
 FluidConfig parse_config(scenario::Section& section, double scene_output_interval);

@@ -7,6 +7,7 @@
 
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/fluid_mps/observers.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 #include "cosim/output/point_series.hpp"
 #include "fluid_config.hpp"
@@ -16,10 +17,19 @@ namespace {
 
 using namespace cosim;
 
-mps::ParticleSet build_scene(mps::MpsParameters& parameters, const mps::SceneSettings& scene) {
+mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings& scene) {
   if (scene.kind == "dam_break") {
     return mps::dam_break(parameters, scene.column_width, scene.column_height, scene.tank_length,
                           scene.tank_height, scene.wall_layers, scene.dummy_layers);
+  }
+  if (scene.kind == "periodic_channel") {
+    return mps::periodic_channel(parameters, scene.length, scene.depth, scene.slope,
+                                 scene.wall_layers, scene.dummy_layers);
+  }
+  if (scene.kind == "open_channel") {
+    return mps::open_channel(parameters, scene.inflow, scene.length, scene.depth,
+                             scene.block_height, scene.block_columns, scene.pool_particles,
+                             scene.wall_layers, scene.dummy_layers);
   }
   return mps::still_water_tank(parameters, scene.width, scene.depth, scene.tank_height,
                                scene.wall_layers, scene.dummy_layers);
@@ -67,6 +77,7 @@ int main(int argc, char** argv) {
     mps::FluidConfig config = mps::parse_config(section, context.scene.output_interval);
     mps::ParticleSet particles = build_scene(config.parameters, config.scene);
     std::unique_ptr<mps::FluidSystem> system;
+    std::unique_ptr<mps::OpenBoundaries> open_boundaries;
     if (config.restart) {
       system =
           std::make_unique<mps::FluidSystem>(config.parameters, state_from_frame(*config.restart));
@@ -74,6 +85,13 @@ int main(int argc, char** argv) {
                    config.restart->frame, system->time());
     } else {
       system = std::make_unique<mps::FluidSystem>(config.parameters, std::move(particles));
+    }
+    if (config.scene.kind == "open_channel") {
+      open_boundaries = std::make_unique<mps::OpenBoundaries>(*system, config.scene.inflow);
+    }
+    std::optional<mps::ObservationPoints> observation;
+    if (config.observation) {
+      observation.emplace(config.observation->points, config.observation->radius);
     }
     spdlog::info("{} particles, l0 = {} m, stable dt {:.3g} s", system->particle_count(),
                  config.parameters.particle_spacing, system->stable_dt());
@@ -101,6 +119,14 @@ int main(int argc, char** argv) {
           writer.write_frame(make_frame(*system));
         coupler::MetricsReport report;
         if (reference) reference->report(report);
+        if (observation)
+          observation->write_csv((context.output_dir() / "observation_points.csv").string());
+        if (open_boundaries) {
+          report.info()["inflow_volume"] = open_boundaries->inflow_volume();
+          report.info()["recycled_particles"] = open_boundaries->recycled_total();
+          report.info()["final_inflow_velocity"] = open_boundaries->velocity();
+          report.info()["final_measured_level"] = open_boundaries->measured_level();
+        }
         report.info()["particles"] = system->particle_count();
         report.info()["steps"] = steps;
         report.info()["mean_pcg_iterations"] = steps > 0 ? double(pcg_iterations) / steps : 0.0;
@@ -135,13 +161,16 @@ int main(int argc, char** argv) {
             std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));
         for (int piece = 0; piece < pieces; ++piece) {
           const auto step = system->step(window.dt / pieces);
+          if (open_boundaries) open_boundaries->update();
           pcg_iterations += step.pcg_iterations;
           most_pcg_iterations = std::max(most_pcg_iterations, step.pcg_iterations);
           ++window_steps;
         }
         steps += window_steps;
       }
-      if (reference) reference->observe(*system);
+      if (observation) observation->record(*system);
+      if (reference)
+        reference->observe(*system, reaction_impulse, observation ? &*observation : nullptr);
       for (const auto& solid : solids) {
         const auto velocity =
             system->sample_velocity(solid.positions, config.sample_radius, &water);

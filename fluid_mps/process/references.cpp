@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -59,9 +61,36 @@ ReferenceTracker::ReferenceTracker(const ReferenceSettings& settings, double gra
   }
 }
 
-void ReferenceTracker::observe(const FluidSystem& system) {
+void ReferenceTracker::observe(const FluidSystem& system, const Eigen::Vector3d& reaction_impulse,
+                               const ObservationPoints* observation) {
   last_time_ = system.time();
   density_ = system.parameters().density;
+  if (settings_.kind == "canopy_balance") {
+    observation_ = observation;
+    if (system.time() < settings_.average_from) return;
+    if (!averaging_) {
+      averaging_ = true;
+      average_start_ = system.time();
+      impulse_start_ = reaction_impulse;
+      momentum_start_ = system.total_fluid_momentum();
+    }
+    impulse_end_ = reaction_impulse;
+    momentum_end_ = system.total_fluid_momentum();
+    // Driving force per bed area of the periodic channel: the along-channel gravity on the
+    // fluid plus the imposed pressure drop over the fluid depth.
+    const auto& p = system.parameters();
+    const double l0 = p.particle_spacing;
+    period_length_ = p.periodic.length();
+    viscosity_ = p.kinematic_viscosity;
+    int fluid = 0;
+    for (const auto kind : system.kinds()) fluid += kind == ParticleKind::fluid;
+    const double area = fluid * l0 * l0;  // 2D: fluid cross-section per unit width
+    driving_per_area_sum_ += (p.density * p.gravity.x() * area +
+                              p.periodic.driving_pressure_drop * area / period_length_) /
+                             period_length_;
+    ++driving_samples_;
+    return;
+  }
   if (settings_.kind == "martin_moyce") {
     times_.push_back(system.time());
     fronts_.push_back(surge_front_position(system));
@@ -79,6 +108,48 @@ void ReferenceTracker::observe(const FluidSystem& system) {
 }
 
 void ReferenceTracker::report(coupler::MetricsReport& report) const {
+  if (settings_.kind == "canopy_balance") {
+    if (!averaging_ || !observation_ || last_time_ <= average_start_) return;
+    const double span = last_time_ - average_start_;
+    // Time-mean streamwise velocity at each observation point, by height.
+    std::vector<std::pair<double, double>> profile;
+    for (std::size_t q = 0; q < observation_->points().size(); ++q) {
+      profile.emplace_back(observation_->points()[q].y(),
+                           observation_->mean_velocity(q, average_start_, last_time_).x());
+    }
+    std::sort(profile.begin(), profile.end());
+    // Inflection of u(y): where the shear du/dy is largest (seed 000 fig. 3: at the canopy top).
+    double inflection = profile.front().first, largest_shear = -1e300;
+    for (std::size_t k = 1; k < profile.size(); ++k) {
+      const double shear =
+          (profile[k].second - profile[k - 1].second) / (profile[k].first - profile[k - 1].first);
+      if (shear > largest_shear) {
+        largest_shear = shear;
+        inflection = 0.5 * (profile[k].first + profile[k - 1].first);
+      }
+    }
+    report.compare("inflection_height", inflection, settings_.canopy_height, "m",
+                   "canopy top (seed 000 section 3.1, fig. 3)");
+    // Momentum balance per bed area: canopy drag = driving - bed shear stress, with the bed
+    // stress from the time-mean velocity at the lowest observation point (linear near the bed).
+    const double canopy_drag = -(impulse_end_ - impulse_start_).x() / span / period_length_;
+    const double driving = driving_per_area_sum_ / driving_samples_;
+    const double bed_stress =
+        density_ * viscosity_ * profile.front().second / profile.front().first;
+    // What the fluid gained itself over the averaging time (zero once the flow is steady).
+    const double acceleration = (momentum_end_ - momentum_start_).x() / span / period_length_;
+    report.compare("canopy_drag_per_bed_area", canopy_drag, driving - bed_stress - acceleration,
+                   "Pa",
+                   "momentum balance per bed area: driving force - bed shear stress - fluid "
+                   "momentum gain (rho g S H - tau_b at steady state)");
+    report.info()["fluid_momentum_gain_per_bed_area"] = acceleration;
+    report.info()["driving_per_bed_area"] = driving;
+    report.info()["bed_shear_stress"] = bed_stress;
+    nlohmann::json mean_profile = nlohmann::json::array();
+    for (const auto& [y, u] : profile) mean_profile.push_back({y, u});
+    report.info()["mean_velocity_profile"] = mean_profile;
+    return;
+  }
   if (settings_.kind == "martin_moyce") {
     const double a = settings_.column_width;
     const std::string source = "Martin & Moyce (1952), n^2 = 2";

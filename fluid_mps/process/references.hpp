@@ -8,6 +8,7 @@
 
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/observers.hpp"
 #include "fluid_config.hpp"
 
 namespace cosim::mps {
@@ -16,7 +17,9 @@ namespace cosim::mps {
 class ReferenceTracker {
  public:
   ReferenceTracker(const ReferenceSettings& settings, double gravity);
-  void observe(const FluidSystem& system);
+  // reaction_impulse: the impulse the solids have given the fluid so far (per unit width in 2D).
+  void observe(const FluidSystem& system, const Eigen::Vector3d& reaction_impulse,
+               const ObservationPoints* observation);
   void report(coupler::MetricsReport& report) const;
 
  private:
@@ -31,6 +34,16 @@ class ReferenceTracker {
   int pressure_samples_ = 0;
   double density_ = 1000;
   double last_time_ = 0;
+  // canopy_balance
+  const ObservationPoints* observation_ = nullptr;
+  bool averaging_ = false;
+  double average_start_ = 0;
+  Eigen::Vector3d impulse_start_ = Eigen::Vector3d::Zero(), impulse_end_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d momentum_start_ = Eigen::Vector3d::Zero(),
+                  momentum_end_ = Eigen::Vector3d::Zero();
+  double driving_per_area_sum_ = 0;  // summed per observation, averaged at the end
+  int driving_samples_ = 0;
+  double period_length_ = 1, viscosity_ = 1e-6;
 };
 
 }  // namespace cosim::mps
