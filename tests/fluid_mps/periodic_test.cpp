@@ -256,3 +256,28 @@ TEST(MpsPeriodic, SeamPlacementDoesNotMatter) {
             << " s; highest particle at x=" << top_x << "\n";
   EXPECT_LT(worst, 1e-3 * l0);
 }
+
+// Seed 000 section 3.1 geometry: depth 0.084 m, slope 0.00304 (l0 = 2 mm as in seed 000).
+TEST(MpsPeriodic, Seed000ChannelGeometry) {
+  MpsParameters p;
+  p.particle_spacing = 0.002;
+  const ParticleSet set = periodic_channel(p, 0.1, 0.084, 0.00304);
+  int fluid = 0, wall = 0, dummy = 0;
+  double top = 0.0;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    fluid += set.kinds[i] == ParticleKind::fluid;
+    wall += set.kinds[i] == ParticleKind::wall;
+    dummy += set.kinds[i] == ParticleKind::dummy;
+    if (set.kinds[i] == ParticleKind::fluid) top = std::max(top, set.positions[i].y());
+  }
+  EXPECT_EQ(fluid, 50 * 42);
+  EXPECT_EQ(wall, 2 * 50);
+  EXPECT_EQ(dummy, 2 * 50);
+  EXPECT_NEAR(top + 0.001, 0.084, 1e-12);
+  EXPECT_NEAR(p.gravity.x(), 9.81 * 0.00304, 1e-12);
+  EXPECT_NEAR(p.gravity.norm(), 9.81, 1e-12);
+  EXPECT_TRUE(p.periodic.enabled);
+  EXPECT_NEAR(p.periodic.length(), 0.1, 1e-12);
+  FluidSystem system(p, set);  // valid: period 0.1 m > 3 x 4 l0
+  EXPECT_EQ(system.particle_count(), static_cast<int>(set.size()));
+}

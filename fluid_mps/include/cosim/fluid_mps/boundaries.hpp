@@ -33,7 +33,7 @@ struct OpenBoundarySettings {
   double inflow_x = 0.0;
   double bed_y = 0.0;
   // Particles of the moving wall block: wall particles with x < inflow_x and y > bed_y at
-  // construction. Each column that passes inflow_x dissolves: its lowest `inflow_rows` particles
+  // construction. Each column that passes inflow_x dissolves: its lowest n rows (see control)
   // become fluid with the wall velocity, the rest return to the pool, and a new column of
   // `block_rows` wall particles (from the pool) is added l0 behind the last column.
   int block_rows = 10;
@@ -60,7 +60,7 @@ struct OpenBoundarySettings {
   LevelMeasure level_measure = LevelMeasure::mean_depth;
   double level_offset = -1.0;  // [m]; < 0: 2 l0
   double level_window = 0.0;   // [m]; <= 0: 8 l0
-  double level_gain = 1.0;     // [1/s]
+  double level_gain = 1.0;     // [1/s^2]: dU/dt per metre of level error
   double min_velocity = 0.0;
   double max_velocity = 2.0;
   // Free outflow: fluid particles with x > outflow_x or y < outflow_y_min leave the flow and are
