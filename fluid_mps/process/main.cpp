@@ -109,6 +109,7 @@ int main(int argc, char** argv) {
     int most_pcg_iterations = 0;
     Eigen::Vector3d undelivered = Eigen::Vector3d::Zero();
     Eigen::Vector3d reaction_impulse = Eigen::Vector3d::Zero();  // given to the fluid by solids
+    Eigen::Vector3d wall_impulse = Eigen::Vector3d::Zero();  // viscous impulse of walls on fluid
     double previous_dt = 0.0;  // window 1 applies the solids' window-0 drag, which is zero
     std::vector<double> water;
     while (true) {
@@ -161,6 +162,7 @@ int main(int argc, char** argv) {
             std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));
         for (int piece = 0; piece < pieces; ++piece) {
           const auto step = system->step(window.dt / pieces);
+          wall_impulse += step.wall_viscous_force * (window.dt / pieces);
           if (open_boundaries) open_boundaries->update();
           pcg_iterations += step.pcg_iterations;
           most_pcg_iterations = std::max(most_pcg_iterations, step.pcg_iterations);
@@ -170,7 +172,8 @@ int main(int argc, char** argv) {
       }
       if (observation) observation->record(*system);
       if (reference)
-        reference->observe(*system, reaction_impulse, observation ? &*observation : nullptr);
+        reference->observe(*system, reaction_impulse, wall_impulse,
+                           observation ? &*observation : nullptr);
       for (const auto& solid : solids) {
         const auto velocity =
             system->sample_velocity(solid.positions, config.sample_radius, &water);

@@ -62,6 +62,7 @@ ReferenceTracker::ReferenceTracker(const ReferenceSettings& settings, double gra
 }
 
 void ReferenceTracker::observe(const FluidSystem& system, const Eigen::Vector3d& reaction_impulse,
+                               const Eigen::Vector3d& wall_impulse,
                                const ObservationPoints* observation) {
   last_time_ = system.time();
   density_ = system.parameters().density;
@@ -72,9 +73,11 @@ void ReferenceTracker::observe(const FluidSystem& system, const Eigen::Vector3d&
       averaging_ = true;
       average_start_ = system.time();
       impulse_start_ = reaction_impulse;
+      wall_start_ = wall_impulse;
       momentum_start_ = system.total_fluid_momentum();
     }
     impulse_end_ = reaction_impulse;
+    wall_end_ = wall_impulse;
     momentum_end_ = system.total_fluid_momentum();
     // Driving force per bed area of the periodic channel: the along-channel gravity on the
     // fluid plus the imposed pressure drop over the fluid depth.
@@ -118,23 +121,30 @@ void ReferenceTracker::report(coupler::MetricsReport& report) const {
                            observation_->mean_velocity(q, average_start_, last_time_).x());
     }
     std::sort(profile.begin(), profile.end());
-    // Inflection of u(y): where the shear du/dy is largest (seed 000 fig. 3: at the canopy top).
-    double inflection = profile.front().first, largest_shear = -1e300;
+    // Inflection of u(y) (seed 000 fig. 3: at the canopy top): the largest shear above the canopy
+    // interior, where the shear is smallest; the bed's own boundary layer lies below that.
+    std::vector<double> shear, middle;
     for (std::size_t k = 1; k < profile.size(); ++k) {
-      const double shear =
-          (profile[k].second - profile[k - 1].second) / (profile[k].first - profile[k - 1].first);
-      if (shear > largest_shear) {
-        largest_shear = shear;
-        inflection = 0.5 * (profile[k].first + profile[k - 1].first);
-      }
+      shear.push_back((profile[k].second - profile[k - 1].second) /
+                      (profile[k].first - profile[k - 1].first));
+      middle.push_back(0.5 * (profile[k].first + profile[k - 1].first));
     }
+    const std::size_t interior = static_cast<std::size_t>(
+        std::min_element(shear.begin(), shear.end(),
+                         [](double a, double b) { return std::abs(a) < std::abs(b); }) -
+        shear.begin());
+    const std::size_t peak = static_cast<std::size_t>(
+        std::max_element(shear.begin() + interior, shear.end()) - shear.begin());
+    const double inflection = middle[peak];
     report.compare("inflection_height", inflection, settings_.canopy_height, "m",
                    "canopy top (seed 000 section 3.1, fig. 3)");
     // Momentum balance per bed area: canopy drag = driving - bed shear stress, with the bed
     // stress from the time-mean velocity at the lowest observation point (linear near the bed).
     const double canopy_drag = -(impulse_end_ - impulse_start_).x() / span / period_length_;
     const double driving = driving_per_area_sum_ / driving_samples_;
-    const double bed_stress =
+    // The bed shear stress is what the solver's walls exerted on the fluid (their viscous force).
+    const double bed_stress = -(wall_end_ - wall_start_).x() / span / period_length_;
+    report.info()["bed_shear_stress_from_lowest_probe"] =
         density_ * viscosity_ * profile.front().second / profile.front().first;
     // What the fluid gained itself over the averaging time (zero once the flow is steady).
     const double acceleration = (momentum_end_ - momentum_start_).x() / span / period_length_;

@@ -18,8 +18,9 @@ class ReferenceTracker {
  public:
   ReferenceTracker(const ReferenceSettings& settings, double gravity);
   // reaction_impulse: the impulse the solids have given the fluid so far (per unit width in 2D).
+  // wall_impulse: the viscous impulse the walls (the bed) have given the fluid so far.
   void observe(const FluidSystem& system, const Eigen::Vector3d& reaction_impulse,
-               const ObservationPoints* observation);
+               const Eigen::Vector3d& wall_impulse, const ObservationPoints* observation);
   void report(coupler::MetricsReport& report) const;
 
  private:
@@ -39,6 +40,7 @@ class ReferenceTracker {
   bool averaging_ = false;
   double average_start_ = 0;
   Eigen::Vector3d impulse_start_ = Eigen::Vector3d::Zero(), impulse_end_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d wall_start_ = Eigen::Vector3d::Zero(), wall_end_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d momentum_start_ = Eigen::Vector3d::Zero(),
                   momentum_end_ = Eigen::Vector3d::Zero();
   double driving_per_area_sum_ = 0;  // summed per observation, averaged at the end
