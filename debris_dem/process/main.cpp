@@ -117,6 +117,14 @@ int main(int argc, char** argv) {
         coupler::MetricsReport report;
         if (config.dam) {
           report.value("capture_rate_P_V", dem::capture_rate(world, debris, config.dam->x), "");
+          // P_V counts everything upstream of the dam, so it only means capture once the debris
+          // has arrived: the volume fraction within 0.2 m of the dam or past it.
+          double arrived = 0.0, total = 0.0;
+          for (const int element : debris) {
+            total += world.volume(element);
+            if (world.position(element).x() > config.dam->x - 0.2) arrived += world.volume(element);
+          }
+          report.value("debris_arrived_at_dam", total > 0 ? arrived / total : 0.0, "");
           report.value("gap_ratio_lV_over_dmax", config.dam->vertical_gap / d_max, "");
         }
         report.value("woody_debris_ratio_K_w", log_volume / (sphere_volume + log_volume), "");
