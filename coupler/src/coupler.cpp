@@ -58,119 +58,108 @@ void Coupler::check_silence(const std::vector<std::string>& pending, const std::
   }
 }
 
-void Coupler::handshake(ProcessGroup& processes) {
+void Coupler::collect(ProcessGroup& processes, const Collection& collection) {
   std::vector<std::string> pending = names_;
   auto last_broadcast = Clock::now() - std::chrono::hours(1);
   const auto start = Clock::now();
+  const double resend = scene_.coupling.resend_interval;
   while (!pending.empty()) {
-    // Fast at first; a participant still initialising after a few seconds is asked less often.
+    // Rebroadcasting is both retransmission and the coupler's heartbeat. A participant still
+    // initialising after a few seconds is asked less often.
     const double interval =
-        seconds_since(start) < 2.0 ? scene_.coupling.resend_interval
-                                   : std::max(scene_.coupling.resend_interval, 0.5);
+        collection.patient && seconds_since(start) >= 2.0 ? std::max(resend, 0.5) : resend;
     if (seconds_since(last_broadcast) >= interval) {
-      bus_->publish_window(Stamp{0, 0.0, 0.0}, window_t::COMMAND_HANDSHAKE, scene_.total_windows());
+      bus_->publish_window(collection.stamp, collection.command, scene_.total_windows());
       last_broadcast = Clock::now();
     }
-    bus_->poll(scene_.coupling.resend_interval);
-    auto& statuses = bus_->statuses();
-    while (!statuses.empty()) {
-      const status_t status = statuses.front();
-      statuses.pop_front();
-      if (status.state == status_t::STATE_FAILED) {
-        throw Failure(
-            fmt::format("'{}' failed while starting: {}", status.header.sender, status.message));
-      }
-      if (status.state == status_t::STATE_READY) std::erase(pending, status.header.sender);
-    }
-    check_processes(processes, "start-up");
-    // A participant still building its initial state (packing debris, say) sends heartbeats:
-    // it may take as long as it needs while it keeps them coming. Only a participant never
-    // heard from within the start-up timeout is reported.
-    check_silence(pending, "start-up");
-    if (seconds_since(start) > options_.startup_timeout) {
-      std::vector<std::string> never_heard;
-      for (const auto& name : pending) {
-        if (!bus_->last_heard(name)) never_heard.push_back(name);
-      }
-      if (!never_heard.empty()) {
-        throw Failure(fmt::format("participant(s) {} did not start within {:.0f} s",
-                                  fmt::join(never_heard, ", "), options_.startup_timeout));
-      }
-    }
-  }
-}
-
-void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, double dt) {
-  const std::string during = fmt::format("window {} (t = {:.6g} s)", index, time);
-  std::vector<std::string> pending = names_;
-  auto last_broadcast = Clock::now() - std::chrono::hours(1);
-  next_stable_dt_ = 0.0;
-  while (!pending.empty()) {
-    if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
-      // Rebroadcasting is both retransmission and the coupler's heartbeat.
-      bus_->publish_window(Stamp{index, time, dt}, window_t::COMMAND_ADVANCE,
-                           scene_.total_windows());
-      last_broadcast = Clock::now();
-    }
-    bus_->poll(scene_.coupling.resend_interval);
+    bus_->poll(resend);
     auto& statuses = bus_->statuses();
     while (!statuses.empty()) {
       const status_t status = statuses.front();
       statuses.pop_front();
       const std::string& sender = status.header.sender;
       if (status.state == status_t::STATE_FAILED) {
-        throw Failure(fmt::format("'{}' failed in window {} (t = {:.6g} s): {}", sender,
-                                  status.header.window, status.header.sim_time, status.message));
+        throw Failure(
+            fmt::format("'{}' failed {}: {}", sender, collection.failed_during, status.message));
       }
-      if (status.state != status_t::STATE_DONE || status.header.window != index) continue;
+      if (status.state != collection.answer) continue;
+      if (collection.answer == status_t::STATE_DONE &&
+          status.header.window != collection.stamp.window) {
+        continue;
+      }
       if (std::find(pending.begin(), pending.end(), sender) == pending.end()) continue;
       std::erase(pending, sender);
-      auto& report = reports_[sender];
-      report.windows += 1;
-      report.steps += status.steps;
-      report.compute_seconds = status.compute_seconds;
-      report.wait_seconds = status.wait_seconds;
-      if (status.stable_dt > 0.0) {
-        next_stable_dt_ =
-            next_stable_dt_ > 0.0 ? std::min(next_stable_dt_, status.stable_dt) : status.stable_dt;
-      }
+      if (collection.accept) collection.accept(status);
     }
-    check_processes(processes, during);
-    check_silence(pending, during);
+    check_processes(processes, collection.during);
+    check_silence(pending, collection.during);
+    if (collection.check) collection.check(pending, seconds_since(start));
   }
+}
+
+void Coupler::handshake(ProcessGroup& processes) {
+  Collection collection;
+  collection.stamp = Stamp{0, 0.0, 0.0};
+  collection.command = window_t::COMMAND_HANDSHAKE;
+  collection.answer = status_t::STATE_READY;
+  collection.during = "start-up";
+  collection.failed_during = "while starting";
+  collection.patient = true;
+  // A participant still building its initial state (packing debris, say) sends heartbeats: it
+  // may take as long as it needs while it keeps them coming. Only a participant never heard
+  // from within the start-up timeout is reported.
+  collection.check = [this](const std::vector<std::string>& pending, double waited) {
+    if (waited <= options_.startup_timeout) return;
+    std::vector<std::string> never_heard;
+    for (const auto& name : pending) {
+      if (!bus_->last_heard(name)) never_heard.push_back(name);
+    }
+    if (!never_heard.empty()) {
+      throw Failure(fmt::format("participant(s) {} did not start within {:.0f} s",
+                                fmt::join(never_heard, ", "), options_.startup_timeout));
+    }
+  };
+  collect(processes, collection);
+}
+
+void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, double dt) {
+  next_stable_dt_ = 0.0;
+  Collection collection;
+  collection.stamp = Stamp{index, time, dt};
+  collection.command = window_t::COMMAND_ADVANCE;
+  collection.answer = status_t::STATE_DONE;
+  collection.during = fmt::format("window {} (t = {:.6g} s)", index, time);
+  collection.failed_during = "in " + collection.during;
+  collection.accept = [this](const status_t& status) {
+    auto& report = reports_[status.header.sender];
+    report.windows += 1;
+    report.steps += status.steps;
+    report.compute_seconds = status.compute_seconds;
+    report.wait_seconds = status.wait_seconds;
+    if (status.stable_dt > 0.0) {
+      next_stable_dt_ =
+          next_stable_dt_ > 0.0 ? std::min(next_stable_dt_, status.stable_dt) : status.stable_dt;
+    }
+  };
+  collect(processes, collection);
   // The coupler records fields but never uses them: keep its memory flat over long runs.
   bus_->forget_fields_before(index);
 }
 
 void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
-  std::vector<std::string> pending = names_;
-  auto last_broadcast = Clock::now() - std::chrono::hours(1);
-  while (!pending.empty()) {
-    if (seconds_since(last_broadcast) >= scene_.coupling.resend_interval) {
-      bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_FINISH,
-                           scene_.total_windows());
-      last_broadcast = Clock::now();
-    }
-    bus_->poll(scene_.coupling.resend_interval);
-    auto& statuses = bus_->statuses();
-    while (!statuses.empty()) {
-      const status_t status = statuses.front();
-      statuses.pop_front();
-      const std::string& sender = status.header.sender;
-      if (status.state == status_t::STATE_FAILED) {
-        throw Failure(fmt::format("'{}' failed while finishing: {}", sender, status.message));
-      }
-      if (status.state != status_t::STATE_FINISHED) continue;
-      if (std::find(pending.begin(), pending.end(), sender) == pending.end()) continue;
-      std::erase(pending, sender);
-      auto& report = reports_[sender];
-      report.metrics_json = status.message;
-      report.compute_seconds = status.compute_seconds;
-      report.wait_seconds = status.wait_seconds;
-    }
-    check_processes(processes, "the final report");
-    check_silence(pending, "the final report");
-  }
+  Collection collection;
+  collection.stamp = Stamp{index, time, 0.0};
+  collection.command = window_t::COMMAND_FINISH;
+  collection.answer = status_t::STATE_FINISHED;
+  collection.during = "the final report";
+  collection.failed_during = "while finishing";
+  collection.accept = [this](const status_t& status) {
+    auto& report = reports_[status.header.sender];
+    report.metrics_json = status.message;
+    report.compute_seconds = status.compute_seconds;
+    report.wait_seconds = status.wait_seconds;
+  };
+  collect(processes, collection);
   for (int repeat = 0; repeat < 3; ++repeat) {
     bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_RELEASE,
                          scene_.total_windows());

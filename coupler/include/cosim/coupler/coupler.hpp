@@ -55,6 +55,19 @@ class Coupler {
   struct Failure : std::runtime_error {
     using std::runtime_error::runtime_error;
   };
+  // One round of the lockstep: broadcast `command` until every participant answers `answer`
+  // (for this window when the answer is DONE); a failure, exit or silence ends the run.
+  struct Collection {
+    Stamp stamp;
+    int8_t command = 0;
+    int8_t answer = 0;
+    std::string during;         // "window 5 (t = ...)", for exits and silence
+    std::string failed_during;  // "in window 5 (t = ...)", for reported failures
+    bool patient = false;       // rebroadcast slowly after a while (long initialisations)
+    std::function<void(const cosim_msgs::status_t&)> accept;
+    std::function<void(const std::vector<std::string>& pending, double waited)> check;
+  };
+  void collect(ProcessGroup& processes, const Collection& collection);
   void handshake(ProcessGroup& processes);
   void run_window(ProcessGroup& processes, int64_t index, double time, double dt);
   void finish(ProcessGroup& processes, int64_t index, double time);
