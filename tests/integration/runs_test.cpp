@@ -192,3 +192,35 @@ TEST(Runs, ReplayDetectsADifferentSolver) {
 
 }  // namespace
 }  // namespace cosim::testing
+
+namespace cosim::testing {
+namespace {
+
+TEST(Runs, SweepTabulatesEveryMetricPerValue) {
+  const auto runs = fresh_folder("sweep");
+  const auto result = run_cosim(fmt::format(
+      "sweep {} --vary participants.vegetation_beam.plants.0.links --values 4 8 --runs-dir {} "
+      "--quiet",
+      blade(), runs.string()));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  std::filesystem::path table;
+  for (const auto& entry : std::filesystem::directory_iterator(runs)) {
+    if (entry.path().extension() == ".csv") table = entry.path();
+  }
+  ASSERT_FALSE(table.empty()) << result.output;
+  std::ifstream in(table);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("participants.vegetation_beam.plants.0.links,ok,wall_seconds,metric", 0),
+            0u);
+  int rows = 0, tip_rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    tip_rows += line.find("vegetation_beam.tip_streamwise_displacement") != std::string::npos;
+  }
+  EXPECT_EQ(tip_rows, 2) << "one row per value";
+  EXPECT_EQ(rows, 4) << "two metrics of the beam for each of two values";
+}
+
+}  // namespace
+}  // namespace cosim::testing
