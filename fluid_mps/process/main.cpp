@@ -108,9 +108,8 @@ int main(int argc, char** argv) {
     int64_t steps = 0, pcg_iterations = 0;
     int most_pcg_iterations = 0;
     Eigen::Vector3d undelivered = Eigen::Vector3d::Zero();
-    Eigen::Vector3d reaction_impulse = Eigen::Vector3d::Zero();  // given to the fluid by solids
-    Eigen::Vector3d wall_impulse = Eigen::Vector3d::Zero();  // viscous impulse of walls on fluid
-    double previous_dt = 0.0;  // window 1 applies the solids' window-0 drag, which is zero
+    mps::FluidImpulses impulses;  // momentum the fluid received, by source
+    double previous_dt = 0.0;     // window 1 applies the solids' window-0 drag, which is zero
     std::vector<double> water;
     while (true) {
       const coupler::Window window = participant.next_window();
@@ -134,8 +133,8 @@ int main(int argc, char** argv) {
         report.info()["most_pcg_iterations"] = most_pcg_iterations;
         report.info()["undelivered_solid_force_impulse"] = {undelivered.x(), undelivered.y(),
                                                             undelivered.z()};
-        report.info()["solid_reaction_impulse"] = {reaction_impulse.x(), reaction_impulse.y(),
-                                                   reaction_impulse.z()};
+        report.info()["solid_reaction_impulse"] = {impulses.solids.x(), impulses.solids.y(),
+                                                   impulses.solids.z()};
         participant.finished(report.dump());
         return;
       }
@@ -150,7 +149,7 @@ int main(int argc, char** argv) {
           std::vector<Eigen::Vector3d> reaction(solid.drag.size());
           for (std::size_t i = 0; i < reaction.size(); ++i) {
             reaction[i] = -force_scale * impulse_scale * solid.drag[i];
-            reaction_impulse += reaction[i] * window.dt;
+            impulses.solids += reaction[i] * window.dt;
           }
           const auto delivery =
               system->apply_point_forces(solid.positions, reaction, config.sample_radius);
@@ -162,7 +161,10 @@ int main(int argc, char** argv) {
             std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));
         for (int piece = 0; piece < pieces; ++piece) {
           const auto step = system->step(window.dt / pieces);
-          wall_impulse += step.wall_viscous_force * (window.dt / pieces);
+          impulses.wall_viscous += step.wall_viscous_force * (window.dt / pieces);
+          impulses.wall_collision += step.wall_collision_impulse;
+          impulses.wall_pressure += step.wall_pressure_impulse;
+          impulses.fluid_pressure += step.pressure_impulse - step.wall_pressure_impulse;
           if (open_boundaries) open_boundaries->update();
           pcg_iterations += step.pcg_iterations;
           most_pcg_iterations = std::max(most_pcg_iterations, step.pcg_iterations);
@@ -171,9 +173,7 @@ int main(int argc, char** argv) {
         steps += window_steps;
       }
       if (observation) observation->record(*system);
-      if (reference)
-        reference->observe(*system, reaction_impulse, wall_impulse,
-                           observation ? &*observation : nullptr);
+      if (reference) reference->observe(*system, impulses, observation ? &*observation : nullptr);
       for (const auto& solid : solids) {
         const auto velocity =
             system->sample_velocity(solid.positions, config.sample_radius, &water);

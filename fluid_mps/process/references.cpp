@@ -61,8 +61,7 @@ ReferenceTracker::ReferenceTracker(const ReferenceSettings& settings, double gra
   }
 }
 
-void ReferenceTracker::observe(const FluidSystem& system, const Eigen::Vector3d& reaction_impulse,
-                               const Eigen::Vector3d& wall_impulse,
+void ReferenceTracker::observe(const FluidSystem& system, const FluidImpulses& impulses,
                                const ObservationPoints* observation) {
   last_time_ = system.time();
   density_ = system.parameters().density;
@@ -72,12 +71,10 @@ void ReferenceTracker::observe(const FluidSystem& system, const Eigen::Vector3d&
     if (!averaging_) {
       averaging_ = true;
       average_start_ = system.time();
-      impulse_start_ = reaction_impulse;
-      wall_start_ = wall_impulse;
+      impulses_start_ = impulses;
       momentum_start_ = system.total_fluid_momentum();
     }
-    impulse_end_ = reaction_impulse;
-    wall_end_ = wall_impulse;
+    impulses_end_ = impulses;
     momentum_end_ = system.total_fluid_momentum();
     // Driving force per bed area of the periodic channel: the along-channel gravity on the
     // fluid plus the imposed pressure drop over the fluid depth.
@@ -138,23 +135,37 @@ void ReferenceTracker::report(coupler::MetricsReport& report) const {
     const double inflection = middle[peak];
     report.compare("inflection_height", inflection, settings_.canopy_height, "m",
                    "canopy top (seed 000 section 3.1, fig. 3)");
-    // Momentum balance per bed area: canopy drag = driving - bed shear stress, with the bed
-    // stress from the time-mean velocity at the lowest observation point (linear near the bed).
-    const double canopy_drag = -(impulse_end_ - impulse_start_).x() / span / period_length_;
+    // Momentum balance per bed area: canopy drag = driving - bed stress - fluid momentum gain,
+    // the bed stress being everything the bed's particles exert along the flow (viscous,
+    // collision and pressure-gradient terms of the solver).
+    auto per_area = [&](const Eigen::Vector3d& end, const Eigen::Vector3d& start) {
+      return (end - start).x() / span / period_length_;
+    };
+    const auto& a = impulses_start_;
+    const auto& b = impulses_end_;
+    const double canopy_drag = -per_area(b.solids, a.solids);
     const double driving = driving_per_area_sum_ / driving_samples_;
-    // The bed shear stress is what the solver's walls exerted on the fluid (their viscous force).
-    const double bed_stress = -(wall_end_ - wall_start_).x() / span / period_length_;
-    report.info()["bed_shear_stress_from_lowest_probe"] =
-        density_ * viscosity_ * profile.front().second / profile.front().first;
+    const double bed_viscous = -per_area(b.wall_viscous, a.wall_viscous);
+    const double bed_collision = -per_area(b.wall_collision, a.wall_collision);
+    const double bed_pressure = -per_area(b.wall_pressure, a.wall_pressure);
+    const double bed_stress = bed_viscous + bed_collision + bed_pressure;
+    const double internal = per_area(b.fluid_pressure, a.fluid_pressure);
     // What the fluid gained itself over the averaging time (zero once the flow is steady).
     const double acceleration = (momentum_end_ - momentum_start_).x() / span / period_length_;
     report.compare("canopy_drag_per_bed_area", canopy_drag, driving - bed_stress - acceleration,
                    "Pa",
-                   "momentum balance per bed area: driving force - bed shear stress - fluid "
-                   "momentum gain (rho g S H - tau_b at steady state)");
+                   "momentum balance per bed area: driving force - bed stress - fluid momentum "
+                   "gain (rho g S H - tau_b at steady state)");
     report.info()["fluid_momentum_gain_per_bed_area"] = acceleration;
+    report.info()["bed_stress_viscous"] = bed_viscous;
+    report.info()["bed_stress_collision"] = bed_collision;
+    report.info()["bed_stress_pressure"] = bed_pressure;
+    // Fluid-fluid pressure forces that do not cancel, and what no term explains (should be ~0).
+    report.info()["pressure_non_conservation_per_bed_area"] = internal;
+    report.info()["unexplained_per_bed_area"] =
+        acceleration - (driving - canopy_drag - bed_stress + internal);
     report.info()["driving_per_bed_area"] = driving;
-    report.info()["bed_shear_stress"] = bed_stress;
+    report.info()["bed_stress"] = bed_stress;
     nlohmann::json mean_profile = nlohmann::json::array();
     for (const auto& [y, u] : profile) mean_profile.push_back({y, u});
     report.info()["mean_velocity_profile"] = mean_profile;

@@ -13,14 +13,21 @@
 
 namespace cosim::mps {
 
+// Running sums of the momentum the fluid received, by source [N s/m in 2D].
+struct FluidImpulses {
+  Eigen::Vector3d solids = Eigen::Vector3d::Zero();          // minus the solids' drag
+  Eigen::Vector3d wall_viscous = Eigen::Vector3d::Zero();    // bed shear (viscous part)
+  Eigen::Vector3d wall_collision = Eigen::Vector3d::Zero();  // collision model against walls
+  Eigen::Vector3d wall_pressure = Eigen::Vector3d::Zero();   // pressure gradient of walls
+  Eigen::Vector3d fluid_pressure = Eigen::Vector3d::Zero();  // fluid-fluid: non-conservation
+};
+
 // Samples the run at the end of every window and reports against the reference at the end.
 class ReferenceTracker {
  public:
   ReferenceTracker(const ReferenceSettings& settings, double gravity);
-  // reaction_impulse: the impulse the solids have given the fluid so far (per unit width in 2D).
-  // wall_impulse: the viscous impulse the walls (the bed) have given the fluid so far.
-  void observe(const FluidSystem& system, const Eigen::Vector3d& reaction_impulse,
-               const Eigen::Vector3d& wall_impulse, const ObservationPoints* observation);
+  void observe(const FluidSystem& system, const FluidImpulses& impulses,
+               const ObservationPoints* observation);
   void report(coupler::MetricsReport& report) const;
 
  private:
@@ -39,8 +46,7 @@ class ReferenceTracker {
   const ObservationPoints* observation_ = nullptr;
   bool averaging_ = false;
   double average_start_ = 0;
-  Eigen::Vector3d impulse_start_ = Eigen::Vector3d::Zero(), impulse_end_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d wall_start_ = Eigen::Vector3d::Zero(), wall_end_ = Eigen::Vector3d::Zero();
+  FluidImpulses impulses_start_, impulses_end_;
   Eigen::Vector3d momentum_start_ = Eigen::Vector3d::Zero(),
                   momentum_end_ = Eigen::Vector3d::Zero();
   double driving_per_area_sum_ = 0;  // summed per observation, averaged at the end

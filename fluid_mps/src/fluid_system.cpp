@@ -277,6 +277,7 @@ StepReport FluidSystem::step(double dt) {
   if (collision_distance > 0.0) {
     list = build_list(position_star, collision_distance);
     std::vector<Eigen::Vector3d> correction(n, Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d> wall_correction(n, Eigen::Vector3d::Zero());
     std::vector<int> collided(n, 0);
 #pragma omp parallel for schedule(static) if (n >= 4096)
     for (int i = 0; i < n; ++i) {
@@ -289,7 +290,9 @@ StepReport FluidSystem::step(double dt) {
         const double approach = (velocity_star[j] - velocity_star[i]).dot(normal);
         if (approach >= 0.0) continue;
         const double share = is_fluid(kinds_[j]) ? 0.5 : 1.0;
-        correction[i] += (1.0 + p.collision_restitution) * share * approach * normal;
+        const Eigen::Vector3d change = (1.0 + p.collision_restitution) * share * approach * normal;
+        correction[i] += change;
+        if (!is_fluid(kinds_[j])) wall_correction[i] += change;
         ++collided[i];
       }
     }
@@ -298,6 +301,8 @@ StepReport FluidSystem::step(double dt) {
       velocity_star[i] += correction[i];
       position_star[i] += dt * correction[i];
       report.collisions += collided[i];
+      report.collision_impulse += particle_mass_ * correction[i];
+      report.wall_collision_impulse += particle_mass_ * wall_correction[i];
     }
   }
 
@@ -408,6 +413,8 @@ StepReport FluidSystem::step(double dt) {
   // correction u' = -dt/rho <grad p>, r^{n+1} = r* + dt u'.
   std::vector<Eigen::Vector3d> next_velocity(velocity_star);
   std::vector<Eigen::Vector3d> next_position(position_star);
+  std::vector<Eigen::Vector3d> pressure_change(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> wall_pressure_change(n, Eigen::Vector3d::Zero());
   const double gradient_factor = dt / p.density * d / n0_g;
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
@@ -419,19 +426,27 @@ StepReport FluidSystem::step(double dt) {
         minimum = std::min(minimum, pressure[j]);
       }
     }
-    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero(), wall_gradient = Eigen::Vector3d::Zero();
     for (int k = list.begin(i); k < list.end(i); ++k) {
       const int j = list.index[k];
       const double r = list.distance[k];
       if (kinds_[j] == ParticleKind::dummy || r >= re_g) continue;
-      gradient += (pressure[j] - minimum) / (r * r) * weight(r, re_g) *
-                  periodic.wrap(position_star[j] - position_star[i]);
+      const Eigen::Vector3d term = (pressure[j] - minimum) / (r * r) * weight(r, re_g) *
+                                   periodic.wrap(position_star[j] - position_star[i]);
+      gradient += term;
+      if (!is_fluid(kinds_[j])) wall_gradient += term;
     }
     const Eigen::Vector3d correction = -gradient_factor * gradient;
     next_velocity[i] += correction;
     next_position[i] += dt * correction;
+    pressure_change[i] = correction;
+    wall_pressure_change[i] = -gradient_factor * wall_gradient;
   }
 
+  for (int i = 0; i < n; ++i) {  // serial sums: the same result with any thread count
+    report.pressure_impulse += particle_mass_ * pressure_change[i];
+    report.wall_pressure_impulse += particle_mass_ * wall_pressure_change[i];
+  }
   positions_ = std::move(next_position);
   if (periodic.enabled) {  // re-entry at x_min (seed 001 fig. 2.4 (2))
     for (int i = 0; i < n; ++i) positions_[i].x() = periodic.fold(positions_[i].x());

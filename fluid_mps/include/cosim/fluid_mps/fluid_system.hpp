@@ -21,6 +21,14 @@ struct StepReport {
   // Viscous force of the wall and dummy particles on the fluid (Laplacian model, explicit part at
   // r^n) [N in 3D, N/m in 2D]: the bed shear of a channel.
   Eigen::Vector3d wall_viscous_force = Eigen::Vector3d::Zero();
+  // Momentum the fluid received in this step from the collision model and from the pressure
+  // gradient [N s, N s/m in 2D], and the parts of those that came from wall particles. The
+  // fluid-fluid parts of the pressure gradient do not cancel exactly (the p_j - p_min form is not
+  // antisymmetric): pressure_impulse - wall_pressure_impulse is that non-conservation.
+  Eigen::Vector3d collision_impulse = Eigen::Vector3d::Zero();
+  Eigen::Vector3d wall_collision_impulse = Eigen::Vector3d::Zero();
+  Eigen::Vector3d pressure_impulse = Eigen::Vector3d::Zero();
+  Eigen::Vector3d wall_pressure_impulse = Eigen::Vector3d::Zero();
 };
 
 // Result of apply_point_forces: forces of points with no fluid inside the radius are dropped.
