@@ -71,9 +71,7 @@ void report_metrics(const vegetation::VegetationConfig& config, const vegetation
   const Eigen::Vector3d across = reference.velocity - reference.velocity.dot(up) * up;
   vegetation::ElasticaProblem problem;
   problem.length = spec.length;
-  problem.bending_stiffness = spec.bending_stiffness > 0 ? spec.bending_stiffness
-                                                         : spec.youngs_modulus * spec.width *
-                                                               std::pow(spec.thickness, 3) / 12;
+  problem.bending_stiffness = spec.bending_stiffness;  // specs() hold the derived EI
   problem.width = spec.width;
   problem.thickness = spec.thickness;
   problem.plant_density = spec.density;
