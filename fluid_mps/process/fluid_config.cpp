@@ -42,6 +42,9 @@ MpsParameters parse_parameters(scenario::Section& section) {
   p.pressure_relaxation =
       section.number("pressure_relaxation", p.pressure_relaxation, Range::between(0.0, 1.0));
   p.runaway_speed = section.number("runaway_speed", p.runaway_speed, Range::positive());
+  const std::string form = section.text("pressure_gradient", "minimum", {"minimum", "symmetric"});
+  p.gradient_form = form == "symmetric" ? MpsParameters::GradientForm::symmetric
+                                        : MpsParameters::GradientForm::minimum;
   return p;
 }
 
@@ -90,6 +93,7 @@ SceneSettings parse_scene(scenario::Section scene) {
   } else {
     s.length = scene.number("length", Range::positive());
     s.depth = scene.number("initial_depth", Range::non_negative());
+    s.slope = scene.number("slope", 0.0, Range::between(-0.5, 0.5));
     s.block_height = scene.number("block_height", Range::positive());
     s.block_columns = scene.integer("block_columns", s.block_columns, Range::between(1, 100));
     s.pool_particles = scene.integer("pool_particles", s.pool_particles, Range::between(1, 1e7));

@@ -21,6 +21,14 @@ void add_bed(ParticleSet& set, double l0, int first, int last, int wall_layers, 
   }
 }
 
+// Bed slope sin(theta) as a gravity tilt: g = |g| (sin theta, -cos theta), flow along +x.
+void tilt_gravity(MpsParameters& parameters, double slope) {
+  if (std::abs(slope) >= 1.0) throw std::invalid_argument("channel scenes: |slope| < 1");
+  if (slope == 0.0) return;
+  const double g = parameters.gravity.norm();
+  parameters.gravity = Eigen::Vector3d(g * slope, -g * std::sqrt(1.0 - slope * slope), 0.0);
+}
+
 void require_2d(const MpsParameters& p) {
   if (p.dimension != 2) throw std::invalid_argument("channel scenes are 2D (dimension = 2)");
 }
@@ -30,7 +38,7 @@ void require_2d(const MpsParameters& p) {
 ParticleSet periodic_channel(MpsParameters& parameters, double length, double depth, double slope,
                              int wall_layers, int dummy_layers) {
   require_2d(parameters);
-  if (std::abs(slope) >= 1.0) throw std::invalid_argument("periodic_channel: |slope| < 1");
+  tilt_gravity(parameters, slope);
   const double l0 = parameters.particle_spacing;
   const int nx = cells(length, l0), ny = cells(depth, l0);
   ParticleSet set;
@@ -38,10 +46,6 @@ ParticleSet periodic_channel(MpsParameters& parameters, double length, double de
     for (int ix = 0; ix < nx; ++ix)
       set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, 0.0), ParticleKind::fluid);
   add_bed(set, l0, 0, nx, wall_layers, dummy_layers);
-  if (slope != 0.0) {  // bed slope as a gravity tilt: g (sin theta, -cos theta)
-    const double g = parameters.gravity.norm();
-    parameters.gravity = Eigen::Vector3d(g * slope, -g * std::sqrt(1.0 - slope * slope), 0.0);
-  }
   parameters.periodic.enabled = true;
   parameters.periodic.x_min = 0.0;
   parameters.periodic.x_max = nx * l0;
@@ -56,8 +60,9 @@ ParticleSet periodic_channel(MpsParameters& parameters, double length, double de
 
 ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settings, double length,
                          double initial_depth, double block_height, int block_columns,
-                         int pool_particles, int wall_layers, int dummy_layers) {
+                         int pool_particles, int wall_layers, int dummy_layers, double slope) {
   require_2d(parameters);
+  tilt_gravity(parameters, slope);
   const double l0 = parameters.particle_spacing;
   const int nx = cells(length, l0), ny = cells(initial_depth, l0);
   const int rows = cells(block_height, l0);

@@ -409,29 +409,38 @@ StepReport FluidSystem::step(double dt) {
   }
 
   // 5. Pressure gradient (seed 000 eq. (2), radius re_g) with the minimum neighbour pressure
-  // p^_i in place of p_i (Koshizuka-Oka) so that inter-particle forces stay repulsive, and the
-  // correction u' = -dt/rho <grad p>, r^{n+1} = r* + dt u'.
+  // p^_i in place of p_i (Koshizuka-Oka) so that inter-particle forces stay repulsive, or the
+  // symmetric pair form (MpsParameters::GradientForm), and the correction
+  // u' = -dt/rho <grad p>, r^{n+1} = r* + dt u'.
   std::vector<Eigen::Vector3d> next_velocity(velocity_star);
   std::vector<Eigen::Vector3d> next_position(position_star);
   std::vector<Eigen::Vector3d> pressure_change(n, Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> wall_pressure_change(n, Eigen::Vector3d::Zero());
   const double gradient_factor = dt / p.density * d / n0_g;
+  const bool symmetric = p.gradient_form == MpsParameters::GradientForm::symmetric;
+  std::vector<double> minimum(n, 0.0);  // p^_i
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (!is_fluid(kinds_[i])) continue;
-    double minimum = pressure[i];
+    if (!is_fluid(kinds_[i]) || symmetric) continue;
+    double smallest = pressure[i];
     for (int k = list.begin(i); k < list.end(i); ++k) {
       const int j = list.index[k];
       if (kinds_[j] != ParticleKind::dummy && list.distance[k] < re_g) {
-        minimum = std::min(minimum, pressure[j]);
+        smallest = std::min(smallest, pressure[j]);
       }
     }
+    minimum[i] = smallest;
+  }
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (!is_fluid(kinds_[i])) continue;
     Eigen::Vector3d gradient = Eigen::Vector3d::Zero(), wall_gradient = Eigen::Vector3d::Zero();
     for (int k = list.begin(i); k < list.end(i); ++k) {
       const int j = list.index[k];
       const double r = list.distance[k];
       if (kinds_[j] == ParticleKind::dummy || r >= re_g) continue;
-      const Eigen::Vector3d term = (pressure[j] - minimum) / (r * r) * weight(r, re_g) *
+      const double difference = symmetric ? pressure[i] + pressure[j] : pressure[j] - minimum[i];
+      const Eigen::Vector3d term = difference / (r * r) * weight(r, re_g) *
                                    periodic.wrap(position_star[j] - position_star[i]);
       gradient += term;
       if (!is_fluid(kinds_[j])) wall_gradient += term;

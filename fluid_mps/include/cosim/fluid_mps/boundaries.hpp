@@ -117,10 +117,12 @@ class OpenBoundaries {
 // at x = 0; a block of block_columns x block_rows wall particles just upstream of it; still water
 // of `initial_depth` on x in [0, length]; `pool_particles` inactive particles parked under the
 // outlet. Fills parameters.domain if empty and `settings` (inflow_x = 0, bed_y = 0, block_rows,
-// outflow_x = length + 3 l0, outflow_y_min = -(layers + 4) l0).
+// outflow_x = length + 3 l0, outflow_y_min = -(layers + 4) l0). slope = sin(theta) tilts
+// gravity as in periodic_channel.
 ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settings, double length,
                          double initial_depth, double block_height, int block_columns = 4,
-                         int pool_particles = 400, int wall_layers = 2, int dummy_layers = 2);
+                         int pool_particles = 400, int wall_layers = 2, int dummy_layers = 2,
+                         double slope = 0.0);
 
 // Scene: periodic open channel (seed 000 section 3.1, seed 001 section 2.2(4)): x in [0, length)
 // periodic, still water of `depth` over a bed of wall + dummy layers. slope = sin(theta) tilts

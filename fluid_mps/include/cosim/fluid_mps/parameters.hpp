@@ -89,7 +89,20 @@ struct MpsParameters {
   enum class SourceTerm { density, mixed };
   SourceTerm source_term = SourceTerm::density;
   double pressure_relaxation = 0.2;  // gamma
-  double runaway_speed = 50.0;       // [m/s]; faster particles stop the run with a StabilityError
+  // Pressure gradient model.
+  //  minimum:   d/n0 sum (p_j - p^_i) r_ij w / r^2 with p^_i the smallest pressure around i
+  //             (Koshizuka-Oka; seed 000 eq. (2) with p^_i for stability). Pair forces are not
+  //             equal and opposite, so the fluid's own pressure creates net momentum.
+  //  symmetric: d/n0 sum (p_i + p_j) r_ij w / r^2 (the pair form of SPH): antisymmetric in i, j,
+  //             so fluid-fluid pressure forces conserve linear momentum exactly and stay
+  //             repulsive (p >= 0). Exact for a linear p on a full lattice, but the p_i sum
+  //             pulls particles towards lattice sites: still water is noisier and fluid next to
+  //             a wall locks onto the wall lattice (a bed friction far above the viscous one).
+  //             Subtracting each particle's p^ as well (CMPS of Khayyer & Gotoh 2008) keeps the
+  //             symmetry but leaves only the gradient of p - p^, about zero in hydrostatic water.
+  enum class GradientForm { minimum, symmetric };
+  GradientForm gradient_form = GradientForm::minimum;
+  double runaway_speed = 50.0;  // [m/s]; faster particles stop the run with a StabilityError
   // Particles outside are 'escaped'. Empty box: the bounding box of the initial particles grown
   // by 20 l0 on each side.
   Eigen::AlignedBox3d domain;
