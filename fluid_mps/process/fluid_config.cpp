@@ -71,10 +71,10 @@ OpenBoundarySettings parse_inflow(scenario::Section inflow) {
   return settings;
 }
 
-SceneSettings parse_scene(scenario::Section scene) {
+SceneSettings parse_scene(scenario::Section scene, double gravity) {
   SceneSettings s;
-  s.kind =
-      scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel", "open_channel"});
+  s.kind = scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel",
+                                 "open_channel", "pool_fishway", "periodic_pool"});
   if (s.kind == "dam_break") {
     s.column_width = scene.number("column_width", Range::positive());
     s.column_height = scene.number("column_height", Range::positive());
@@ -90,6 +90,36 @@ SceneSettings parse_scene(scenario::Section scene) {
     s.depth = scene.number("depth", Range::positive());
     s.slope = scene.number("slope", 0.0, Range::between(-0.5, 0.5));
     s.driving_pressure_drop = scene.number("driving_pressure_drop", 0.0);
+  } else if (s.kind == "pool_fishway" || s.kind == "periodic_pool") {
+    FishwayGeometry& g = s.fishway;
+    g.pool_length = scene.number("pool_length", g.pool_length, Range::positive());
+    g.step_height = scene.number("step_height", g.step_height, Range::non_negative());
+    g.weir_height = scene.number("weir_height", g.weir_height, Range::positive());
+    g.orifice_height = scene.number("orifice_height", g.orifice_height, Range::non_negative());
+    if (g.orifice_height >= g.weir_height) scene.fail("orifice_height", "must be below the crest");
+    g.partition_columns =
+        scene.integer("partition_columns", g.partition_columns, Range::between(1, 10));
+    if (s.kind == "pool_fishway") {
+      g.pools = scene.integer("pools", g.pools, Range::between(1, 100));
+      g.outlet_length = scene.number("outlet_length", g.outlet_length, Range::positive());
+      g.block_height = scene.number("block_height", g.block_height, Range::positive());
+      if (g.block_height <= g.weir_height) scene.fail("block_height", "must exceed weir_height");
+      g.block_columns = scene.integer("block_columns", g.block_columns, Range::between(1, 100));
+      g.pool_particles = scene.integer("pool_particles", g.pool_particles, Range::between(1, 1e7));
+      s.inflow = parse_inflow(scene.child("inflow"));
+      // Start the pools at the weir head of the inflow discharge (Rehbock) above their crests.
+      if (scene.flag("fill_to_weir_head", false)) {
+        if (s.inflow.control != OpenBoundarySettings::Control::discharge) {
+          scene.fail("fill_to_weir_head", "needs inflow.control: discharge");
+        }
+        g.initial_head = rehbock_head(s.inflow.discharge, g.weir_height, gravity);
+      }
+      if (g.block_height <= g.weir_height + g.initial_head) {
+        scene.fail("block_height", "must exceed the initial water level");
+      }
+    } else {
+      s.fill_discharge = scene.number("fill_discharge", Range::positive());
+    }
   } else {
     s.length = scene.number("length", Range::positive());
     s.depth = scene.number("initial_depth", Range::non_negative());
@@ -114,7 +144,7 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
     config.restart = RestartSettings{restart.existing_file("file"), restart.integer("frame", -1)};
   }
   // The initial scene is still described on restart: it documents the run and sets the tank.
-  config.scene = parse_scene(section.child("scene"));
+  config.scene = parse_scene(section.child("scene"), config.parameters.gravity.norm());
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
   for (auto& partition :
        section.has("partitions") ? section.list("partitions") : std::vector<scenario::Section>{}) {
@@ -148,8 +178,13 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
   if (section.has("reference")) {
     auto reference = section.child("reference");
     ReferenceSettings r;
-    r.kind = reference.choice("kind", {"martin_moyce", "hydrostatic", "canopy_balance"});
-    if (r.kind == "canopy_balance") {
+    r.kind = reference.choice("kind", {"martin_moyce", "hydrostatic", "canopy_balance", "weirs"});
+    if (r.kind == "weirs") {
+      if (config.scene.kind != "pool_fishway" && config.scene.kind != "periodic_pool") {
+        reference.fail("kind", "weirs needs a pool_fishway or periodic_pool scene");
+      }
+      r.average_from = reference.number("average_from", Range::non_negative());
+    } else if (r.kind == "canopy_balance") {
       if (!config.observation) reference.fail("kind", "canopy_balance needs `observe` points");
       if (config.scene.kind != "periodic_channel") {
         reference.fail("kind", "canopy_balance needs a periodic_channel scene");

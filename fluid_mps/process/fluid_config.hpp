@@ -8,13 +8,15 @@
 #include <vector>
 
 #include "cosim/fluid_mps/boundaries.hpp"
+#include "cosim/fluid_mps/fishway.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/scenario/section.hpp"
 
 namespace cosim::mps {
 
 struct SceneSettings {
-  std::string kind;  // dam_break | still_water_tank | periodic_channel | open_channel
+  // dam_break | still_water_tank | periodic_channel | open_channel | pool_fishway | periodic_pool
+  std::string kind;
   double column_width = 0, column_height = 0;  // dam_break
   double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
   double tank_length = 0, tank_height = 0;
@@ -23,7 +25,10 @@ struct SceneSettings {
   double block_height = 0;           // open_channel: height of the soluble moving wall block
   int block_columns = 4, pool_particles = 400;
   int wall_layers = 2, dummy_layers = 2;
-  OpenBoundarySettings inflow;  // open_channel
+  OpenBoundarySettings inflow;  // open_channel, pool_fishway
+  FishwayGeometry fishway;      // pool_fishway, periodic_pool
+  double fill_discharge = 0;    // periodic_pool: fill to the crest plus the weir head of this q
+  std::vector<Weir> weirs;      // filled by the fishway scene builders
 };
 
 // Eulerian observation points (velocity and water presence), recorded every window.
@@ -39,13 +44,13 @@ struct RestartSettings {
 };
 
 struct ReferenceSettings {
-  std::string kind;  // martin_moyce | hydrostatic | canopy_balance
+  std::string kind;  // martin_moyce | hydrostatic | canopy_balance | weirs
   std::filesystem::path file;
   double column_width = 0;           // martin_moyce: a
   std::vector<double> probe_depths;  // hydrostatic: below the still surface, at mid tank
   double still_depth = 0;
   double probe_x = 0;
-  double average_from = 0;   // hydrostatic: time averaging starts here
+  double average_from = 0;   // hydrostatic, weirs: time averaging starts here
   double probe_radius = 0;   // hydrostatic: particles within this radius are averaged [m]
   double canopy_height = 0;  // canopy_balance: the inflection of u(y) is expected there
 };

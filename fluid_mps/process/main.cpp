@@ -10,6 +10,7 @@
 #include "cosim/fluid_mps/observers.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 #include "cosim/output/point_series.hpp"
+#include "fishway_report.hpp"
 #include "fluid_config.hpp"
 #include "references.hpp"
 
@@ -25,6 +26,21 @@ mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings&
   if (scene.kind == "periodic_channel") {
     return mps::periodic_channel(parameters, scene.length, scene.depth, scene.slope,
                                  scene.wall_layers, scene.dummy_layers);
+  }
+  if (scene.kind == "pool_fishway") {
+    return mps::pool_fishway(parameters, scene.inflow, scene.fishway, scene.weirs,
+                             scene.wall_layers, scene.dummy_layers);
+  }
+  if (scene.kind == "periodic_pool") {
+    // Same water volume as a level pool at crest + weir head over a floor that falls by one
+    // step along the pool (the tilted frame of periodic_pool).
+    const auto& g = scene.fishway;
+    const double fill =
+        g.weir_height +
+        mps::rehbock_head(scene.fill_discharge, g.weir_height, parameters.gravity.norm()) -
+        0.5 * g.step_height;
+    return mps::periodic_pool(parameters, scene.fishway, fill, scene.weirs, scene.wall_layers,
+                              scene.dummy_layers);
   }
   if (scene.kind == "open_channel") {
     return mps::open_channel(parameters, scene.inflow, scene.length, scene.depth,
@@ -86,8 +102,15 @@ int main(int argc, char** argv) {
     } else {
       system = std::make_unique<mps::FluidSystem>(config.parameters, std::move(particles));
     }
-    if (config.scene.kind == "open_channel") {
+    if (config.scene.kind == "open_channel" || config.scene.kind == "pool_fishway") {
       open_boundaries = std::make_unique<mps::OpenBoundaries>(*system, config.scene.inflow);
+    }
+    std::optional<mps::FishwayReport> fishway;
+    if (config.reference && config.reference->kind == "weirs") {
+      const bool periodic = config.scene.kind == "periodic_pool";
+      fishway.emplace(
+          config.scene.weirs, config.parameters.particle_spacing, config.reference->average_from,
+          periodic ? config.scene.fill_discharge : config.scene.inflow.discharge, periodic);
     }
     std::optional<mps::ObservationPoints> observation;
     if (config.observation) {
@@ -100,7 +123,9 @@ int main(int argc, char** argv) {
     coupler::FlowLink link(participant, context.scene);
     output::PointSeriesWriter writer(context.output_dir() / "particles", "fluid_mps");
     std::optional<mps::ReferenceTracker> reference;
-    if (config.reference) reference.emplace(*config.reference, -config.parameters.gravity.y());
+    if (config.reference && !fishway) {
+      reference.emplace(*config.reference, -config.parameters.gravity.y());
+    }
     const double force_scale =
         config.parameters.dimension == 2 ? 1.0 / config.spanwise_spacing : 1.0;
 
@@ -119,6 +144,7 @@ int main(int argc, char** argv) {
           writer.write_frame(make_frame(*system));
         coupler::MetricsReport report;
         if (reference) reference->report(report);
+        if (fishway) fishway->report(report);
         if (observation)
           observation->write_csv((context.output_dir() / "observation_points.csv").string());
         if (open_boundaries) {
@@ -174,6 +200,7 @@ int main(int argc, char** argv) {
       }
       if (observation) observation->record(*system);
       if (reference) reference->observe(*system, impulses, observation ? &*observation : nullptr);
+      if (fishway) fishway->observe(*system, open_boundaries.get());
       for (const auto& solid : solids) {
         const auto velocity =
             system->sample_velocity(solid.positions, config.sample_radius, &water);

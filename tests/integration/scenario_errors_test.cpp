@@ -87,5 +87,29 @@ TEST(ScenarioErrors, MissingRequiredKeyIsNamed) {
   expect_refused(replace(kGood, "        width: 0.002\n", ""), "scenario.yaml:10", "width");
 }
 
+// Fishway geometry that cannot be built is refused at its key: an orifice reaching the crest, a
+// pool whose soluble moving wall is lower than the water it starts with.
+TEST(ScenarioErrors, FishwayGeometryIsCheckedAtItsKey) {
+  const std::string fishway = R"(name: fishway
+duration: 0.01
+coupling:
+  window: 1.0e-3
+participants:
+  fluid_mps:
+    particle_spacing: 0.01
+    scene:
+      kind: pool_fishway
+      weir_height: 0.2
+      orifice_height: 0.3
+      block_height: 0.35
+      inflow:
+        discharge: 0.01
+)";
+  expect_refused(fishway, "scenario.yaml:11", "orifice_height");
+  expect_refused(replace(replace(fishway, "orifice_height: 0.3", "fill_to_weir_head: true"),
+                         "block_height: 0.35", "block_height: 0.21"),
+                 "scenario.yaml:12", "block_height");
+}
+
 }  // namespace
 }  // namespace cosim::testing

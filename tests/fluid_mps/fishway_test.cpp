@@ -1,0 +1,169 @@
+// Pool-type fishway scenes (seed 001): geometry without holes or overlaps, the weir equation, the
+// weir gauges on known flows, and a short coarse run that keeps its particles and passes water
+// over its weirs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "cosim/fluid_mps/fishway.hpp"
+#include "cosim/fluid_mps/neighbour_grid.hpp"
+
+using namespace cosim::mps;
+
+namespace {
+
+MpsParameters fishway_parameters(double l0) {
+  MpsParameters p;
+  p.particle_spacing = l0;
+  p.max_dt = 1e-3;
+  p.collision_distance_ratio = 1.0;
+  p.collision_restitution = 0.2;
+  p.radius_gradient_over_l0 = 4.0;
+  return p;
+}
+
+int count_kind(const ParticleSet& set, ParticleKind kind) {
+  int count = 0;
+  for (auto k : set.kinds) count += k == kind ? 1 : 0;
+  return count;
+}
+
+double closest_pair(const ParticleSet& set) {
+  double closest = 1e9;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    if (set.kinds[i] == ParticleKind::inactive) continue;
+    for (std::size_t j = i + 1; j < set.size(); ++j) {
+      if (set.kinds[j] == ParticleKind::inactive) continue;
+      closest = std::min(closest, (set.positions[i] - set.positions[j]).norm());
+    }
+  }
+  return closest;
+}
+
+}  // namespace
+
+TEST(Fishway, RehbockWeirEquation) {
+  // q = 2/3 (0.611 + 0.08 h/P) sqrt(2 g) h^1.5, by hand for h = 0.05 m, P = 0.2 m.
+  EXPECT_NEAR(rehbock_discharge(0.05, 0.2, 9.81), 0.0208326, 1e-7);
+  EXPECT_EQ(rehbock_discharge(0.0, 0.2, 9.81), 0.0);
+  for (double head : {0.01, 0.04, 0.1}) {
+    EXPECT_NEAR(rehbock_head(rehbock_discharge(head, 0.2, 9.81), 0.2, 9.81), head, 1e-12 * head);
+  }
+}
+
+// Three pools of seed 001's size at its l0 = 6.66 mm: water up to every crest, one partition
+// per weir, walls on every face the water touches, no two particles closer than l0.
+TEST(Fishway, PoolFishwayGeometry) {
+  const double l0 = 0.00666;
+  MpsParameters p = fishway_parameters(l0);
+  OpenBoundarySettings inflow;
+  FishwayGeometry geometry;
+  std::vector<Weir> weirs;
+  const ParticleSet set = pool_fishway(p, inflow, geometry, weirs);
+  const int fluid = count_kind(set, ParticleKind::fluid);
+  const int wall = count_kind(set, ParticleKind::wall),
+            dummy = count_kind(set, ParticleKind::dummy);
+  std::cout << "[fishway] fluid " << fluid << " wall " << wall << " dummy " << dummy
+            << " (seed 001: 5229 particles in all)\n";
+  // Pool 0..2: 45 columns minus 2 partition columns, 30 rows up to the crest.
+  EXPECT_EQ(fluid, 3 * 43 * 30);
+  ASSERT_EQ(weirs.size(), 3u);
+  ASSERT_EQ(p.partitions.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(weirs[k].crest.x(), (45 * (k + 1) - 1) * l0, 1e-12);
+    EXPECT_NEAR(weirs[k].crest.y(), (30 - 8 * k) * l0, 1e-12);  // step 0.05 m = 8 l0 (rounded)
+    EXPECT_NEAR(weirs[k].crest_height, 30 * l0, 1e-12);
+  }
+  EXPECT_GT(closest_pair(set), 0.999 * l0);
+  // No holes: a fluid particle that is not near the free surface has the full number density.
+  FluidSystem system(p, set);
+  int interior = 0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& x = system.positions()[i];
+    const int pool = static_cast<int>(x.x() / (45 * l0));
+    if (x.y() > weirs[pool].crest.y() - 3 * l0) continue;
+    ++interior;
+    EXPECT_NEAR(system.number_densities()[i], system.n0_density(), 1e-9)
+        << "at (" << x.x() << ", " << x.y() << ")";
+  }
+  EXPECT_GT(interior, 3000);
+  EXPECT_LT(inflow.outflow_y_min, -2 * 8 * l0);
+  EXPECT_GT(inflow.outflow_x, 3 * 45 * l0);
+}
+
+// A slab of water moving at u over a crest: the gauge gives q = u times the slab thickness, and
+// the head of a flat surface in a tilted (periodic) pool is measured along -g.
+TEST(Fishway, WeirGaugesOnKnownStates) {
+  const double l0 = 0.01, u = 0.5;
+  MpsParameters p = fishway_parameters(l0);
+  ParticleSet slab;
+  for (int ix = 0; ix < 40; ++ix)
+    for (int iy = 0; iy < 8; ++iy)
+      slab.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, 0.0), ParticleKind::fluid,
+               Eigen::Vector3d(u, 0.0, 0.0));
+  FluidSystem system(p, slab);
+  // Crest at y = 0.03: five rows above it; band of two columns centred on a column edge.
+  WeirGauges gauges({Weir{{0.2, 0.03}, 0.1, 0.03}}, 2 * l0, 4 * l0);
+  gauges.record(system);
+  EXPECT_NEAR(gauges.discharge(0), u * 5 * l0, 1e-12);
+  EXPECT_NEAR(gauges.head(0), 5 * l0, 1e-12);
+
+  FishwayGeometry geometry;
+  geometry.pool_length = 0.3;
+  geometry.step_height = 0.05;
+  geometry.weir_height = 0.1;
+  std::vector<Weir> weirs;
+  MpsParameters q = fishway_parameters(l0);
+  FluidSystem pool(q, periodic_pool(q, geometry, 0.14, weirs));
+  ASSERT_TRUE(q.periodic.enabled);
+  const double sine = 0.05 / std::hypot(0.3, 0.05), cosine = std::sqrt(1 - sine * sine);
+  EXPECT_NEAR(q.gravity.x(), 9.81 * sine, 1e-12);
+  WeirGauges tilted(weirs, 2 * l0, 4 * l0);
+  tilted.record(pool);
+  // Four rows above the crest at the gauge, 0.1 m upstream of it, in a frame tilted by theta.
+  EXPECT_NEAR(tilted.head(0), cosine * 4 * l0 + sine * 0.1, 1e-9);
+  EXPECT_NEAR(tilted.discharge(0), 0.0, 1e-15);
+}
+
+// Two coarse pools fed at q = 0.01 m^2/s for 1.5 s: stable, the particle count is conserved
+// (fluid = initial + released - recycled), water passes both crests, and the weir gauge of the
+// first weir sees a positive discharge.
+TEST(Fishway, CoarseRunPassesWaterOverTheWeirs) {
+  const double l0 = 0.01;
+  MpsParameters p = fishway_parameters(l0);
+  OpenBoundarySettings inflow;
+  inflow.control = OpenBoundarySettings::Control::discharge;
+  inflow.discharge = 0.01;
+  FishwayGeometry geometry;
+  geometry.pools = 2;
+  geometry.pool_length = 0.3;
+  geometry.weir_height = 0.15;
+  geometry.block_height = 0.25;
+  geometry.pool_particles = 800;
+  std::vector<Weir> weirs;
+  FluidSystem system(p, pool_fishway(p, inflow, geometry, weirs));
+  OpenBoundaries boundaries(system, inflow);
+  WeirGauges gauges(weirs, 2 * l0, 4 * l0);
+  auto fluid_count = [&] {
+    int count = 0;
+    for (auto k : system.kinds()) count += k == ParticleKind::fluid ? 1 : 0;
+    return count;
+  };
+  const int initial = fluid_count();
+  while (system.time() < 1.5) {
+    system.step(system.stable_dt());
+    boundaries.update();
+    if (system.time() > 0.5) gauges.record(system);
+  }
+  std::cout << "[coarse fishway] released " << boundaries.dissolved_total() << " recycled "
+            << boundaries.recycled_total() << " q1 " << gauges.mean_discharge(0) << " q2 "
+            << gauges.mean_discharge(1) << " h1 " << gauges.mean_head(0) << " h2 "
+            << gauges.mean_head(1) << "\n";
+  EXPECT_EQ(fluid_count(), initial + boundaries.dissolved_total() - boundaries.recycled_total());
+  EXPECT_GT(boundaries.dissolved_total(), 0);
+  EXPECT_GT(boundaries.recycled_total(), 0);  // water left over the last weir
+  EXPECT_GT(gauges.mean_discharge(0), 0.0);
+  EXPECT_GT(gauges.mean_head(0), 0.0);
+}
