@@ -68,6 +68,7 @@ OpenBoundarySettings parse_inflow(scenario::Section inflow) {
   settings.min_velocity =
       inflow.number("min_velocity", settings.min_velocity, Range::non_negative());
   settings.max_velocity = inflow.number("max_velocity", settings.max_velocity, Range::positive());
+  settings.ramp_time = inflow.number("ramp_time", settings.ramp_time, Range::non_negative());
   return settings;
 }
 

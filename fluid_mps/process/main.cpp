@@ -32,13 +32,10 @@ mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings&
                              scene.wall_layers, scene.dummy_layers);
   }
   if (scene.kind == "periodic_pool") {
-    // Same water volume as a level pool at crest + weir head over a floor that falls by one
-    // step along the pool (the tilted frame of periodic_pool).
+    // A level pool at the weir head of the discharge it is to carry.
     const auto& g = scene.fishway;
-    const double fill =
-        g.weir_height +
-        mps::rehbock_head(scene.fill_discharge, g.weir_height, parameters.gravity.norm()) -
-        0.5 * g.step_height;
+    const double fill = g.weir_height + mps::rehbock_head(scene.fill_discharge, g.weir_height,
+                                                          parameters.gravity.norm());
     return mps::periodic_pool(parameters, scene.fishway, fill, scene.weirs, scene.wall_layers,
                               scene.dummy_layers);
   }

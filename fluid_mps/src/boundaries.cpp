@@ -108,8 +108,16 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
   set_block_velocity();
 }
 
+double OpenBoundaries::wall_speed() const {
+  const double ramp = settings_.ramp_time;
+  if (!(ramp > 0.0)) return velocity_;
+  // Scene time, so a restarted run does not ramp again.
+  return velocity_ * std::clamp(system_.time() / ramp, 0.0, 1.0);
+}
+
 void OpenBoundaries::set_block_velocity() {
-  for (int i : block_) system_.set_velocity(i, Eigen::Vector3d(velocity_, 0.0, 0.0));
+  const double speed = wall_speed();
+  for (int i : block_) system_.set_velocity(i, Eigen::Vector3d(speed, 0.0, 0.0));
 }
 
 int OpenBoundaries::take_from_pool() {
@@ -156,7 +164,10 @@ BoundaryUpdate OpenBoundaries::update() {
   for (int i : block_) {
     (system_.positions()[i].x() >= s.inflow_x ? passed : kept).push_back(i);
   }
-  if (passed.empty()) return result;
+  if (passed.empty()) {
+    if (s.ramp_time > 0.0) set_block_velocity();
+    return result;
+  }
   // Level just downstream of the inflow line (seed 001 section 2.2(3)), measured before the new
   // fluid is released.
   const double x0 = s.inflow_x + s.level_offset, x1 = x0 + s.level_window;
@@ -173,6 +184,16 @@ BoundaryUpdate OpenBoundaries::update() {
     level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_y : 0.0;
   } else {
     level_ = inside * l0 * l0 / s.level_window;
+  }
+  // Water above the block would pour back over it: the inflow cannot hold that level. The mean
+  // depth is used whatever the control measures, so a single splash does not count.
+  const double mean_depth = inside * l0 * l0 / s.level_window;
+  if (mean_depth > s.block_rows * l0) {
+    throw std::runtime_error("soluble moving wall: the water level " + std::to_string(mean_depth) +
+                             " m at the inflow is above the block height " +
+                             std::to_string(s.block_rows * l0) +
+                             " m at t = " + std::to_string(system_.time()) +
+                             " s; raise the block height or lower the inflow");
   }
   const double now = system_.time();
   switch (s.control) {
@@ -220,7 +241,7 @@ BoundaryUpdate OpenBoundaries::update() {
       const int i = take_from_pool();
       system_.set_particle(i, ParticleKind::wall,
                            Eigen::Vector3d(x, s.bed_y + (row + 0.5) * l0, 0.0),
-                           Eigen::Vector3d(velocity_, 0.0, 0.0));
+                           Eigen::Vector3d(wall_speed(), 0.0, 0.0));
       block_.push_back(i);
       ++result.created;
     }

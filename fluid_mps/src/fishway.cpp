@@ -141,32 +141,31 @@ ParticleSet periodic_pool(MpsParameters& parameters, const FishwayGeometry& g, d
   const Layout k = layout(parameters, g);
   const double l0 = parameters.particle_spacing;
   const int fill_rows = cells(fill_level, l0), layers = wall_layers + dummy_layers;
-  require(2 * fill_rows >= k.weir_rows, "fill_level must be at least half the weir height");
-  // Mean fishway slope as a gravity tilt: the pool floor is flat in this frame.
-  const double slope = g.step_height / std::hypot(g.pool_length, g.step_height);
-  const double gravity = parameters.gravity.norm();
-  parameters.gravity =
-      Eigen::Vector3d(gravity * slope, -gravity * std::sqrt(1.0 - slope * slope), 0.0);
-  const int columns = k.pool_columns;
-  auto solid = [&](int ix, int iy) {
-    const int x = ((ix % columns) + columns) % columns;  // periodic
+  require(fill_rows >= k.weir_rows, "fill_level must reach the crest");
+  const int columns = k.pool_columns, drop = k.step_rows;
+  // The pool's own cells; its copies up- and downstream are `drop` rows higher and lower, so the
+  // riser under the partition faces the next pool's water and gets walls of its own.
+  std::function<bool(int, int)> solid = [&](int ix, int iy) {
+    if (ix >= columns) return solid(ix - columns, iy + drop);
+    if (ix < 0) return solid(ix + columns, iy - drop);
     if (iy < 0) return true;
-    return x >= columns - k.partition_columns && iy >= k.orifice_rows && iy < k.weir_rows;
+    return ix >= columns - k.partition_columns && iy >= k.orifice_rows && iy < k.weir_rows;
   };
   ParticleSet set;
   for (int ix = 0; ix < columns; ++ix)
     for (int iy = 0; iy < fill_rows; ++iy)
       if (!solid(ix, iy))
         set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, 0.0), ParticleKind::fluid);
-  add_boundary(set, l0, CellBox{0, columns, -layers - 1, k.weir_rows + 1}, solid, wall_layers,
-               dummy_layers);
+  add_boundary(set, l0, CellBox{0, columns, -drop - layers - 1, k.weir_rows + 1}, solid,
+               wall_layers, dummy_layers);
   parameters.periodic.enabled = true;
   parameters.periodic.x_min = 0.0;
   parameters.periodic.x_max = columns * l0;
+  parameters.periodic.drop = drop * l0;
   add_weir(parameters, weirs, k, l0, columns, 0, g.pool_length / 3.0);
   if (parameters.domain.isEmpty()) {
     parameters.domain =
-        Eigen::AlignedBox3d(Eigen::Vector3d(-l0, -(layers + 4) * l0, -l0),
+        Eigen::AlignedBox3d(Eigen::Vector3d(-l0, -(drop + layers + 4) * l0, -l0),
                             Eigen::Vector3d((columns + 1) * l0, 3.0 * fill_level + 10.0 * l0, l0));
   }
   return set;

@@ -125,7 +125,7 @@ void FluidSystem::initialise() {
     domain_box_.max().z() = l0;
   }
   if (p.periodic.enabled) {
-    for (auto& x : positions_) x.x() = p.periodic.fold(x.x());
+    for (auto& x : positions_) x = p.periodic.fold(x);
   }
   check_stability(step_);
   // Initial number densities for the accessor (the step recomputes them at r*).
@@ -458,7 +458,7 @@ StepReport FluidSystem::step(double dt) {
   }
   positions_ = std::move(next_position);
   if (periodic.enabled) {  // re-entry at x_min (seed 001 fig. 2.4 (2))
-    for (int i = 0; i < n; ++i) positions_[i].x() = periodic.fold(positions_[i].x());
+    for (int i = 0; i < n; ++i) positions_[i] = periodic.fold(positions_[i]);
   }
   velocities_ = std::move(next_velocity);
   pressures_ = std::move(pressure);
@@ -478,7 +478,7 @@ void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& 
   if (i < 0 || i >= particle_count()) throw std::out_of_range("set_particle: bad index");
   kinds_[i] = kind;
   positions_[i] = position;
-  if (parameters_.periodic.enabled) positions_[i].x() = parameters_.periodic.fold(position.x());
+  positions_[i] = parameters_.periodic.fold(position);
   velocities_[i] = velocity;
   pressures_[i] = 0.0;
   external_accelerations_[i].setZero();

@@ -123,6 +123,8 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
   }
   const int n = static_cast<int>(positions.size());
   const double radius2 = radius * radius;
+  const int drop_cells =
+      periodic_.enabled ? static_cast<int>(std::ceil(std::abs(periodic_.drop) / cell_size_)) : 0;
   NeighbourList list;
   list.radius = radius;
   list.offset.assign(n + 1, 0);
@@ -130,6 +132,9 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
     const Eigen::Array3i cell = cell_of(positions[i]);
     low = (cell - 1).max(0);
     high = (cell + 1).min(cells_ - 1);
+    // Across a seam with a drop, neighbours are stored up to `drop` higher or lower.
+    low.y() = std::max(0, low.y() - drop_cells);
+    high.y() = std::min(cells_.y() - 1, high.y() + drop_cells);
     x_range(cell.x(), 1, xs);
   };
   auto skipped = [&](int i) { return !included_.empty() && included_[i] == 0; };
@@ -188,8 +193,12 @@ void NeighbourGrid::query(const std::vector<Eigen::Vector3d>& positions,
   const Eigen::Array3i cell = cell_of(point);
   Eigen::Array3i low = cell, high = cell;
   for (int axis = 0; axis < dimension_; ++axis) {
-    low[axis] = std::max(0, cell[axis] - reach);
-    high[axis] = std::min(cells_[axis] - 1, cell[axis] + reach);
+    // Across a seam with a drop, points are stored up to `drop` higher or lower.
+    const int extra = axis == 1 && periodic_.enabled
+                          ? static_cast<int>(std::ceil(std::abs(periodic_.drop) / cell_size_))
+                          : 0;
+    low[axis] = std::max(0, cell[axis] - reach - extra);
+    high[axis] = std::min(cells_[axis] - 1, cell[axis] + reach + extra);
   }
   std::vector<int> xs;
   x_range(cell.x(), reach, xs);

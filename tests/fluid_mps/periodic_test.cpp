@@ -58,6 +58,20 @@ TEST(MpsPeriodic, FoldAndWrap) {
   EXPECT_NEAR(b.fold(-0.15), 0.25, 1e-15);
   EXPECT_NEAR(b.wrap(Eigen::Vector3d(0.39, 1.0, 0.0)).x(), -0.01, 1e-15);
   EXPECT_NEAR(b.wrap(Eigen::Vector3d(-0.3, 1.0, 0.0)).x(), 0.1, 1e-15);
+  // With a drop the downstream copy lies lower: leaving at x_max re-enters at x_min higher.
+  b.drop = 0.05;
+  const Eigen::Vector3d upstream = b.wrap(Eigen::Vector3d(0.39, 1.0, 0.0));
+  EXPECT_NEAR(upstream.x(), -0.01, 1e-15);
+  EXPECT_NEAR(upstream.y(), 1.05, 1e-15);
+  const Eigen::Vector3d downstream = b.wrap(Eigen::Vector3d(-0.39, 1.0, 0.0));
+  EXPECT_NEAR(downstream.x(), 0.01, 1e-15);
+  EXPECT_NEAR(downstream.y(), 0.95, 1e-15);
+  const Eigen::Vector3d reentered = b.fold(Eigen::Vector3d(0.31, 0.2, 0.0));
+  EXPECT_NEAR(reentered.x(), -0.09, 1e-15);
+  EXPECT_NEAR(reentered.y(), 0.25, 1e-15);
+  const Eigen::Vector3d twice_back = b.fold(Eigen::Vector3d(-0.55, 0.2, 0.0));
+  EXPECT_NEAR(twice_back.x(), 0.25, 1e-15);
+  EXPECT_NEAR(twice_back.y(), 0.1, 1e-15);
 }
 
 TEST(MpsPeriodic, NumberDensityHasNoSeam) {

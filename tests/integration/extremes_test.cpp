@@ -73,5 +73,23 @@ TEST(Extremes, ARunawayFluidIsNamedWithStepAndParticle) {
   EXPECT_NE(failure.find("particle"), std::string::npos) << failure;
 }
 
+TEST(Extremes, AnInflowTheFishwayCannotHoldIsNamed) {
+  // Twenty times the design discharge, started softly, fills the pools above the soluble moving
+  // wall: the run stops and says which limit was passed instead of letting water pour back over
+  // the block.
+  const auto runs = fresh_folder("extremes-inflow");
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet --set duration=1.5 "
+                            "--set participants.fluid_mps.scene.inflow.discharge=0.28 "
+                            "--set participants.fluid_mps.scene.fill_to_weir_head=false "
+                            "--set participants.fluid_mps.scene.inflow.ramp_time=0.5",
+                            test_scene("small_fishway").string(), runs.string()),
+                200);
+  EXPECT_EQ(result.exit_code, 1) << result.output;
+  const std::string failure = failure_of(result);
+  EXPECT_NE(failure.find("'fluid_mps' failed in window"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("above the block height"), std::string::npos) << failure;
+}
+
 }  // namespace
 }  // namespace cosim::testing

@@ -63,6 +63,9 @@ struct OpenBoundarySettings {
   double level_gain = 1.0;     // [1/s^2]: dU/dt per metre of level error
   double min_velocity = 0.0;
   double max_velocity = 2.0;
+  // Soft start: the wall speed rises linearly from 0 at t = 0 to full at ramp_time [s] (0: none).
+  // A wall started impulsively into still water throws up a spout at high inflows.
+  double ramp_time = 0.0;
   // Free outflow: fluid particles with x > outflow_x or y < outflow_y_min leave the flow and are
   // kept in the pool (kind inactive, velocity 0) for the inflow to reuse (seed 001 section 2.2(3)).
   double outflow_x = std::numeric_limits<double>::infinity();
@@ -85,7 +88,9 @@ class OpenBoundaries {
 
   BoundaryUpdate update();
 
-  double velocity() const { return velocity_; }  // current wall (inflow) velocity [m/s]
+  // Current wall (inflow) velocity without the soft start [m/s]; the wall moves at wall_speed().
+  double velocity() const { return velocity_; }
+  double wall_speed() const;
   int inflow_rows() const { return rows_; }
   double measured_level() const { return level_; }  // last level above bed_y [m]
   long dissolved_total() const { return dissolved_total_; }

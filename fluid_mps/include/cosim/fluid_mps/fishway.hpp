@@ -50,11 +50,11 @@ ParticleSet pool_fishway(MpsParameters& parameters, OpenBoundarySettings& inflow
                          const FishwayGeometry& geometry, std::vector<Weir>& weirs,
                          int wall_layers = 2, int dummy_layers = 2);
 
-// One pool of the same fishway, periodic in x (seed 001 section 2.2(4), Run-OC): the pool's
-// floor is flat, the mean slope step_height / pool_length tilts gravity (so in reality the floor
-// falls by one step along the pool instead of at the partition), and the water fills the pool to
-// `fill_level` above its floor. Enables parameters.periodic, fills the partition, domain and
-// `weirs` (one).
+// One pool of the same fishway, periodic in x with a drop (seed 001 section 2.2(4), Run-OC):
+// what spills over the partition re-enters at the pool's upstream end, one step higher, so the
+// pool sees the pool above it upstream and the pool below it downstream. Water fills the pool to
+// `fill_level` above its floor. Enables parameters.periodic (with drop = step), fills the
+// partition, domain and `weirs` (one).
 ParticleSet periodic_pool(MpsParameters& parameters, const FishwayGeometry& geometry,
                           double fill_level, std::vector<Weir>& weirs, int wall_layers = 2,
                           int dummy_layers = 2);

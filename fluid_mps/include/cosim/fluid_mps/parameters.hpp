@@ -17,18 +17,28 @@ namespace cosim::mps {
 // difference of seed 000 section 3.1 is applied as the equivalent body force: fluid particles get
 // the acceleration driving_pressure_drop / (rho (x_max - x_min)) along +x.
 // The period must exceed three times the largest influence radius.
+// With a `drop` the copy one period downstream also lies `drop` lower (a chain of stepped pools,
+// seed 001 Run-OC): a particle leaving at x_max re-enters at x_min raised by `drop`, and the
+// neighbours across the seam are seen with that offset.
 struct PeriodicBoundary {
   bool enabled = false;
   double x_min = 0.0;
   double x_max = 0.0;
   double driving_pressure_drop = 0.0;  // [Pa] over one period, p(x_min) - p(x_max)
+  double drop = 0.0;                   // [m] fall of y per period along +x
   double length() const { return x_max - x_min; }
-  // Minimum-image displacement (x only); identity when disabled.
+  // Minimum-image displacement; identity when disabled.
   Eigen::Vector3d wrap(Eigen::Vector3d d) const {
     if (enabled) {
       const double l = length();
-      if (d.x() > 0.5 * l) d.x() -= l;
-      if (d.x() < -0.5 * l) d.x() += l;
+      if (d.x() > 0.5 * l) {  // the upstream copy: higher by drop
+        d.x() -= l;
+        d.y() += drop;
+      }
+      if (d.x() < -0.5 * l) {  // the downstream copy: lower by drop
+        d.x() += l;
+        d.y() -= drop;
+      }
     }
     return d;
   }
@@ -39,6 +49,14 @@ struct PeriodicBoundary {
     double y = x - l * std::floor((x - x_min) / l);
     if (y >= x_max) y -= l;  // rounding
     return y;
+  }
+  // A position moved into the period, y raised by `drop` per period moved upstream.
+  Eigen::Vector3d fold(Eigen::Vector3d position) const {
+    if (!enabled) return position;
+    const double folded = fold(position.x());
+    position.y() += drop * std::round((position.x() - folded) / length());
+    position.x() = folded;
+    return position;
   }
 };
 
