@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "cosim/fluid_mps/observers.hpp"
 
 namespace cosim::mps {
 namespace {
@@ -207,36 +210,29 @@ void WeirGauges::record(const FluidSystem& system) {
   const Eigen::Vector2d up = -p.gravity.head<2>().normalized();
   for (std::size_t w = 0; w < weirs_.size(); ++w) {
     const Weir& weir = weirs_[w];
-    double flux = 0.0, orifice_flux = 0.0;
+    last_discharge_[w] = discharge_through_line(system, weir.crest.x(), weir.crest.y(),
+                                                std::numeric_limits<double>::infinity(), band_);
+    if (weir.orifice_top > weir.floor) {
+      orifice_sum_[w] +=
+          discharge_through_line(system, weir.crest.x(), weir.floor, weir.orifice_top, band_);
+    }
+    // Water surface above the gauge: fluid above the crest in the gauge band, as a thickness.
     int above = 0;
     for (int i = 0; i < system.particle_count(); ++i) {
       if (system.kinds()[i] != ParticleKind::fluid) continue;
       const Eigen::Vector3d& x = system.positions()[i];
-      const auto offset = [&](double from) {
-        return p.periodic.wrap(Eigen::Vector3d(x.x() - from, 0.0, 0.0)).x();
-      };
-      const bool in_band = std::abs(offset(weir.crest.x())) < 0.5 * band_;
-      if (in_band && x.y() > weir.floor && x.y() < weir.orifice_top) {
-        orifice_flux += system.velocities()[i].x();
-      }
-      if (x.y() <= weir.crest.y()) continue;
-      if (in_band) flux += system.velocities()[i].x();
-      if (std::abs(offset(weir.gauge_x)) < 0.5 * gauge_width_) ++above;
+      const double dx = p.periodic.wrap(Eigen::Vector3d(x.x() - weir.gauge_x, 0.0, 0.0)).x();
+      if (x.y() > weir.crest.y() && std::abs(dx) < 0.5 * gauge_width_) ++above;
     }
-    orifice_sum_[w] += orifice_flux * area / band_;
-    last_discharge_[w] = flux * area / band_;
-    // Water surface above the gauge, as an elevation difference from the crest along `up`.
     const double thickness = above * area / gauge_width_;
-    const double along = p.periodic.wrap(Eigen::Vector3d(weir.gauge_x - weir.crest.x(), 0, 0)).x();
+    // As an elevation difference from the crest along `up` (exact also under tilted gravity).
+    const double along =
+        p.periodic.wrap(Eigen::Vector3d(weir.gauge_x - weir.crest.x(), 0.0, 0.0)).x();
     last_head_[w] = up.x() * along + up.y() * thickness;
     discharge_sum_[w] += last_discharge_[w];
     head_sum_[w] += last_head_[w];
   }
   ++samples_;
-}
-
-double WeirGauges::mean_discharge(std::size_t weir) const {
-  return samples_ > 0 ? discharge_sum_.at(weir) / samples_ : 0.0;
 }
 
 double WeirGauges::mean_orifice_discharge(std::size_t weir) const {
