@@ -235,6 +235,10 @@ void WeirGauges::record(const FluidSystem& system) {
   ++samples_;
 }
 
+double WeirGauges::mean_discharge(std::size_t weir) const {
+  return samples_ > 0 ? discharge_sum_.at(weir) / samples_ : 0.0;
+}
+
 double WeirGauges::mean_orifice_discharge(std::size_t weir) const {
   return samples_ > 0 ? orifice_sum_.at(weir) / samples_ : 0.0;
 }
