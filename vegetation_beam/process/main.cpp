@@ -4,6 +4,11 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <stdexcept>
 
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/metrics.hpp"
@@ -40,6 +45,29 @@ output::PointFrame make_frame(const vegetation::PlantField& field,
   }
   return frame;
 }
+
+// One row per interval: time, then one tip displacement per plant along a fixed direction
+// (streamwise) or along each plant's own unstressed direction (height).
+class TipSeries {
+ public:
+  TipSeries(const std::filesystem::path& path, int plants) : out_(path) {
+    if (!out_) throw std::runtime_error("vegetation_beam: cannot write " + path.string());
+    out_ << "time";
+    for (int plant = 0; plant < plants; ++plant) out_ << ",plant_" << plant;
+    out_ << '\n';
+    out_.precision(9);
+  }
+  template <class Displacement>
+  void write(const vegetation::PlantField& field, Displacement displacement) {
+    out_ << field.time();
+    for (int plant = 0; plant < field.plant_count(); ++plant) out_ << ',' << displacement(plant);
+    out_ << '\n';
+  }
+  void flush() { out_.flush(); }
+
+ private:
+  std::ofstream out_;
+};
 
 double mean_after(const std::vector<double>& times, const std::vector<double>& values,
                   double from) {
@@ -123,6 +151,24 @@ int main(int argc, char** argv) {
       return config.canopy ? make_frame(plants, &initial_density, config.canopy->psi_radius)
                            : make_frame(plants);
     };
+    std::optional<TipSeries> tips, tip_heights;
+    double next_tip = 0.0;
+    auto write_tips = [&] {
+      if (!config.canopy || field.time() < next_tip - 1e-12 * std::max(1.0, next_tip)) return;
+      tips->write(field, [&](int plant) {
+        return field.tip_displacement(plant).dot(config.canopy->streamwise);
+      });
+      tip_heights->write(field, [&](int plant) {
+        return field.tip_displacement(plant).dot(field.specs()[plant].direction);
+      });
+      // Multiples of the interval: no drift, and one row per window if windows are longer.
+      const double interval = config.canopy->tip_interval;
+      next_tip = interval * (std::floor(field.time() / interval + 1e-9) + 1.0);
+    };
+    if (config.canopy) {
+      tips.emplace(context.output_dir() / "tips.csv", field.plant_count());
+      tip_heights.emplace(context.output_dir() / "tip_heights.csv", field.plant_count());
+    }
     auto observe_canopy = [&] {
       if (!config.canopy || field.time() < config.canopy->amplitude_from) return;
       for (int plant = 0; plant < field.plant_count(); ++plant) {
@@ -156,7 +202,13 @@ int main(int argc, char** argv) {
         coupler::MetricsReport report;
         report_metrics(config, field, times, tip_streamwise, tip_height, report);
         if (config.canopy) {
+          tips->flush();
+          tip_heights->flush();
           report.value("mean_tip_amplitude", amplitude.mean_amplitude(), "m");
+          double displacement = 0.0;
+          for (int plant = 0; plant < field.plant_count(); ++plant)
+            displacement += field.tip_displacement(plant).dot(config.canopy->streamwise);
+          report.value("mean_tip_displacement", displacement / field.plant_count(), "m");
           const auto psi = vegetation::vegetation_density_change(
               vegetation::vegetation_number_density(field.positions(), config.canopy->psi_radius),
               initial_density);
@@ -179,6 +231,7 @@ int main(int argc, char** argv) {
       }
       if (window.index == 0) {
         record_tip();
+        write_tips();
         writer.write_frame(frame_of(field));
         next_output = config.output_interval;
         link.publish_state(field.positions(), field.velocities(), no_drag);
@@ -200,6 +253,7 @@ int main(int argc, char** argv) {
       drag_impulse += last_drag_impulse;
       record_tip();
       observe_canopy();
+      write_tips();
       if (field.time() >= next_output - 1e-12 * std::max(1.0, next_output)) {
         writer.write_frame(frame_of(field));
         next_output += config.output_interval;

@@ -80,6 +80,8 @@ VegetationConfig parse_config(scenario::Section& section, double scene_output_in
     if (settings.streamwise.norm() == 0.0) canopy.fail("streamwise", "must not be zero");
     settings.streamwise.normalize();
     settings.amplitude_from = canopy.number("amplitude_from", 0.0, Range::non_negative());
+    settings.tip_interval =
+        canopy.number("tip_interval", config.output_interval, Range::positive());
     config.canopy = settings;
   }
   if (section.has("reference")) {

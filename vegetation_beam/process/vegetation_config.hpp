@@ -19,11 +19,13 @@ struct ElasticaReference {
 };
 
 // Canopy measures of seed 000 section 4: the vegetation density change psi (eq. 24) in the
-// output frames and the honami amplitude of every plant's tip.
+// output frames, the honami amplitude of every plant's tip and the tip time series (tips.csv:
+// streamwise, tip_heights.csv: along the plant's unstressed direction, as in seed 000 fig. 9).
 struct CanopySettings {
   double psi_radius = 0.0;  // seed 000: 7 d_veg
   Eigen::Vector3d streamwise = Eigen::Vector3d::UnitX();
   double amplitude_from = 0.0;  // tip extremes are tracked from this time on [s]
+  double tip_interval = 0.0;    // [s] between tip rows; default: the output_interval
 };
 
 struct VegetationConfig {
