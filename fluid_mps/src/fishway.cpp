@@ -64,8 +64,8 @@ Layout layout(const MpsParameters& parameters, const FishwayGeometry& g) {
   return k;
 }
 
-// Partition segment along the middle of the partition columns ending [start_column, +C), from
-// its foot (or the orifice top) to its crest; and the weir gauge for it.
+// Thin-wall segment along the middle of the partition whose columns end at end_column, from its
+// foot (or the orifice top) to its crest; and the weir gauge for it.
 void add_weir(MpsParameters& parameters, std::vector<Weir>& weirs, const Layout& k, double l0,
               int end_column, int floor_row, double gauge_distance) {
   const double x = (end_column - 0.5 * k.partition_columns) * l0;
@@ -93,14 +93,14 @@ ParticleSet pool_fishway(MpsParameters& parameters, OpenBoundarySettings& inflow
   require(g.block_columns >= 1 && g.pool_particles >= block_rows, "block and pool sizes");
   const int first_column = -(g.block_columns + 2),
             end_column = pools * k.pool_columns + outlet_columns;
-  auto pool_of = [&](int ix) { return std::clamp(ix / std::max(1, k.pool_columns), 0, pools); };
+  auto pool_of = [&](int ix) { return std::clamp(ix / k.pool_columns, 0, pools); };
   auto floor_row = [&](int ix) { return ix < 0 ? 0 : -pool_of(ix) * k.step_rows; };
   auto solid = [&](int ix, int iy) {
     if (ix < first_column) return true;  // nothing behind the inflow block
     if (ix >= end_column) return false;  // free overfall
     const int floor = floor_row(ix);
     if (iy < floor) return true;
-    const int pool = ix < 0 ? 0 : ix / k.pool_columns;
+    const int pool = pool_of(ix);
     if (pool < pools && ix >= (pool + 1) * k.pool_columns - k.partition_columns) {
       return iy >= floor + k.orifice_rows && iy < floor + k.weir_rows;
     }
