@@ -9,25 +9,12 @@
 #include "cosim/fluid_mps/fishway.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 
+#include "quiet_settings.hpp"
+
 using namespace cosim::mps;
+using namespace cosim::mps::testing;
 
 namespace {
-
-MpsParameters fishway_parameters(double l0) {
-  MpsParameters p;
-  p.particle_spacing = l0;
-  p.max_dt = 1e-3;
-  p.collision_distance_ratio = 1.0;
-  p.collision_restitution = 0.2;
-  p.radius_gradient_over_l0 = 4.0;
-  return p;
-}
-
-int count_kind(const ParticleSet& set, ParticleKind kind) {
-  int count = 0;
-  for (auto k : set.kinds) count += k == kind ? 1 : 0;
-  return count;
-}
 
 double closest_pair(const ParticleSet& set) {
   double closest = 1e9;
@@ -56,7 +43,7 @@ TEST(Fishway, RehbockWeirEquation) {
 // per weir, walls on every face the water touches, no two particles closer than l0.
 TEST(Fishway, PoolFishwayGeometry) {
   const double l0 = 0.00666;
-  MpsParameters p = fishway_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   OpenBoundarySettings inflow;
   FishwayGeometry geometry;
   std::vector<Weir> weirs;
@@ -97,7 +84,7 @@ TEST(Fishway, PoolFishwayGeometry) {
 // the head is the water above the crest at the gauge.
 TEST(Fishway, WeirGaugesOnKnownStates) {
   const double l0 = 0.01, u = 0.5;
-  MpsParameters p = fishway_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   ParticleSet slab;
   for (int ix = 0; ix < 40; ++ix)
     for (int iy = 0; iy < 8; ++iy)
@@ -121,7 +108,7 @@ TEST(Fishway, PeriodicPoolSeesItsNeighbourPoolsAcrossTheSeam) {
   geometry.step_height = 0.05;
   geometry.weir_height = 0.1;
   std::vector<Weir> weirs;
-  MpsParameters p = fishway_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   const ParticleSet set = periodic_pool(p, geometry, 0.14, weirs);
   ASSERT_TRUE(p.periodic.enabled);
   EXPECT_NEAR(p.periodic.drop, 0.05, 1e-12);
@@ -154,7 +141,7 @@ TEST(Fishway, PeriodicPoolSeesItsNeighbourPoolsAcrossTheSeam) {
 // first weir sees a positive discharge.
 TEST(Fishway, CoarseRunPassesWaterOverTheWeirs) {
   const double l0 = 0.01;
-  MpsParameters p = fishway_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   OpenBoundarySettings inflow;
   inflow.control = OpenBoundarySettings::Control::discharge;
   inflow.discharge = 0.01;

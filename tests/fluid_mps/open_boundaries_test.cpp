@@ -9,33 +9,16 @@
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/observers.hpp"
 
+#include "quiet_settings.hpp"
+
 using namespace cosim::mps;
-
-namespace {
-
-MpsParameters channel_parameters(double l0) {
-  MpsParameters p;
-  p.particle_spacing = l0;
-  p.max_dt = 1e-3;
-  p.collision_distance_ratio = 1.0;
-  p.collision_restitution = 0.2;
-  p.radius_gradient_over_l0 = 4.0;
-  return p;
-}
-
-int count_kind(const FluidSystem& system, ParticleKind kind) {
-  int count = 0;
-  for (auto k : system.kinds()) count += k == kind ? 1 : 0;
-  return count;
-}
-
-}  // namespace
+using namespace cosim::mps::testing;
 
 // Fixed wall velocity: a column of inflow_rows fluid particles is released each time the block
 // travels l0, and the particle count (fluid + block + pool + bed) never changes.
 TEST(MpsOpenBoundaries, VelocityModeReleasesColumnsAndConservesParticles) {
   const double l0 = 0.01;
-  MpsParameters p = channel_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   OpenBoundarySettings settings;
   FluidSystem system(p, open_channel(p, settings, 0.3, 0.0, 0.06, 4, 300));
   settings.control = OpenBoundarySettings::Control::velocity;
@@ -68,7 +51,7 @@ TEST(MpsOpenBoundaries, VelocityModeReleasesColumnsAndConservesParticles) {
 // the flow is established, and recycling keeps the particle count.
 TEST(MpsOpenBoundaries, DischargeControlDeliversPrescribedDischarge) {
   const double l0 = 0.005, q = 0.01;
-  MpsParameters p = channel_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   OpenBoundarySettings settings;
   FluidSystem system(p, open_channel(p, settings, 0.3, 0.025, 0.06, 4, 400));
   settings.control = OpenBoundarySettings::Control::discharge;
@@ -119,7 +102,7 @@ TEST(MpsOpenBoundaries, DischargeControlDeliversPrescribedDischarge) {
 // downstream of the inflow reaches the target.
 TEST(MpsOpenBoundaries, LevelControllerConvergesToTarget) {
   const double l0 = 0.005, target = 0.04;
-  MpsParameters p = channel_parameters(l0);
+  MpsParameters p = quiet_parameters(l0);
   OpenBoundarySettings settings;
   FluidSystem system(p, open_channel(p, settings, 0.3, 0.035, 0.06, 4, 400));
   settings.control = OpenBoundarySettings::Control::level;

@@ -9,7 +9,10 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 
+#include "quiet_settings.hpp"
+
 using namespace cosim::mps;
+using namespace cosim::mps::testing;
 
 TEST(MpsPartition, CrossingTest) {
   PartitionSegment s{{0.0, 0.0}, {0.0, 1.0}};
@@ -92,12 +95,7 @@ PartitionRun run_partitioned(const MpsParameters& parameters, double right_depth
 }
 
 MpsParameters partition_parameters(bool exclusion) {
-  MpsParameters p;
-  p.particle_spacing = 0.01;
-  p.max_dt = 1e-3;
-  p.collision_distance_ratio = 1.0;
-  p.collision_restitution = 0.2;
-  p.radius_gradient_over_l0 = 4.0;
+  MpsParameters p = quiet_parameters(0.01);
   if (exclusion) p.partitions.push_back({{0.14, -0.1}, {0.14, 0.25}});
   return p;
 }

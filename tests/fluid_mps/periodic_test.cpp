@@ -11,15 +11,12 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/observers.hpp"
 
+#include "quiet_settings.hpp"
+
 using namespace cosim::mps;
+using namespace cosim::mps::testing;
 
 namespace {
-
-int count_kind(const FluidSystem& system, ParticleKind kind) {
-  int count = 0;
-  for (auto k : system.kinds()) count += k == kind ? 1 : 0;
-  return count;
-}
 
 // Mean pressure of fluid particles within `radius` of `point`, minimum-image distance.
 double periodic_mean_pressure(const FluidSystem& system, const Eigen::Vector3d& point,
@@ -35,16 +32,6 @@ double periodic_mean_pressure(const FluidSystem& system, const Eigen::Vector3d& 
     }
   }
   return count > 0 ? sum / count : 0.0;
-}
-
-MpsParameters quiet_parameters(double l0) {
-  MpsParameters p;
-  p.particle_spacing = l0;
-  p.max_dt = 1e-3;
-  p.collision_distance_ratio = 1.0;  // as the still-water test (seed 001's findings)
-  p.collision_restitution = 0.2;
-  p.radius_gradient_over_l0 = 4.0;
-  return p;
 }
 
 }  // namespace
