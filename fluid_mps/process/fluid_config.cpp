@@ -104,7 +104,6 @@ SceneSettings parse_scene(scenario::Section scene, double gravity) {
       g.pools = scene.integer("pools", g.pools, Range::between(1, 100));
       g.outlet_length = scene.number("outlet_length", g.outlet_length, Range::positive());
       g.block_height = scene.number("block_height", g.block_height, Range::positive());
-      if (g.block_height <= g.weir_height) scene.fail("block_height", "must exceed weir_height");
       g.block_columns = scene.integer("block_columns", g.block_columns, Range::between(1, 100));
       g.pool_particles = scene.integer("pool_particles", g.pool_particles, Range::between(1, 1e7));
       s.inflow = parse_inflow(scene.child("inflow"));

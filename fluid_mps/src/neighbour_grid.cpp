@@ -76,6 +76,10 @@ void NeighbourGrid::x_range(int x, int reach, std::vector<int>& xs) const {
   std::sort(xs.begin(), xs.end());
 }
 
+int NeighbourGrid::drop_cells() const {
+  return periodic_.enabled ? static_cast<int>(std::ceil(std::abs(periodic_.drop) / cell_size_)) : 0;
+}
+
 void NeighbourGrid::build(const std::vector<Eigen::Vector3d>& positions,
                           const std::vector<char>* include) {
   const std::size_t cell_count = static_cast<std::size_t>(cells_.x()) * cells_.y() * cells_.z();
@@ -123,8 +127,7 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
   }
   const int n = static_cast<int>(positions.size());
   const double radius2 = radius * radius;
-  const int drop_cells =
-      periodic_.enabled ? static_cast<int>(std::ceil(std::abs(periodic_.drop) / cell_size_)) : 0;
+  const int drop_cells = this->drop_cells();
   NeighbourList list;
   list.radius = radius;
   list.offset.assign(n + 1, 0);
@@ -193,10 +196,7 @@ void NeighbourGrid::query(const std::vector<Eigen::Vector3d>& positions,
   const Eigen::Array3i cell = cell_of(point);
   Eigen::Array3i low = cell, high = cell;
   for (int axis = 0; axis < dimension_; ++axis) {
-    // Across a seam with a drop, points are stored up to `drop` higher or lower.
-    const int extra = axis == 1 && periodic_.enabled
-                          ? static_cast<int>(std::ceil(std::abs(periodic_.drop) / cell_size_))
-                          : 0;
+    const int extra = axis == 1 ? drop_cells() : 0;
     low[axis] = std::max(0, cell[axis] - reach - extra);
     high[axis] = std::min(cells_[axis] - 1, cell[axis] + reach + extra);
   }

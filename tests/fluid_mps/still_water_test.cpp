@@ -8,19 +8,16 @@
 
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
+#include "quiet_settings.hpp"
 
 using namespace cosim::mps;
+using namespace cosim::mps::testing;
 
 TEST(MpsStillWater, HydrostaticPressureAndRest) {
   const double width = 0.2, depth = 0.2, l0 = 0.01;
-  MpsParameters p;
-  p.particle_spacing = l0;
-  p.max_dt = 1e-3;
   // Seed 001's findings: a collision distance of 1.0 l0 steadies the free surface, and a wider
   // gradient radius (4.0 l0 here, 8.0 l0 in its fishway) gives a quieter pressure field.
-  p.collision_distance_ratio = 1.0;
-  p.collision_restitution = 0.2;
-  p.radius_gradient_over_l0 = 4.0;
+  MpsParameters p = quiet_parameters(l0);
   FluidSystem system(p, still_water_tank(p, width, depth, 1.5 * depth));
   const double g = 9.81, rho = p.density;
   const auto start = std::chrono::steady_clock::now();

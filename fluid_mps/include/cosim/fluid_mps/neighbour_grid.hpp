@@ -65,6 +65,9 @@ class NeighbourGrid {
                    const Eigen::Array3i& high, Visit&& visit) const;
   // x cells within `reach` of cell x, wrapped when periodic, each once, in ascending order.
   void x_range(int x, int reach, std::vector<int>& xs) const;
+  // Extra y cells to search: across a seam with a drop, neighbours are stored up to `drop`
+  // higher or lower.
+  int drop_cells() const;
 
   int dimension_;
   Eigen::Vector3d origin_;
