@@ -1,5 +1,7 @@
 #include "cosim/coupler/coupler.hpp"
 
+#include "cosim/coupler/frame.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
@@ -119,7 +121,25 @@ void Coupler::handshake(ProcessGroup& processes) {
                                 fmt::join(never_heard, ", "), options_.startup_timeout));
     }
   };
+  std::map<std::string, std::string> declared;
+  collection.accept = [&declared](const status_t& status) {
+    declared[status.header.sender] = status.message;
+  };
   collect(processes, collection);
+  // One world: every participant computes in the same frame under the same gravity, and 2D
+  // ones stand for the same span. A mismatch stops the run before window 1.
+  std::vector<std::pair<std::string, FrameDeclaration>> declarations;
+  for (const auto& name : names_) {
+    try {
+      declarations.emplace_back(name, FrameDeclaration::from_json(declared[name], name));
+    } catch (const std::exception& error) {
+      throw Failure(error.what());
+    }
+  }
+  if (const std::string problem = check_declarations(declarations, scene_.world);
+      !problem.empty()) {
+    throw Failure("participants disagree on the world: " + problem);
+  }
 }
 
 void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, double dt) {

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <limits>
+
 namespace cosim::coupler {
 
 SolidLink::SolidLink(Participant& participant, const scenario::Scene& scene,
@@ -35,6 +38,13 @@ AmbientFlow SolidLink::receive(int64_t flow_window) {
                                     water_field, flow_name_, flow_window, point_count_,
                                     flow.water_fraction.size()));
   }
+  flow.surface_elevation =
+      participant_.receive(flow_name_, exchange::surface_field(me), flow_window);
+  if (flow.surface_elevation.size() != point_count_) {
+    throw CouplingError(fmt::format("field '{}' from '{}' (window {}): expected {} values, got {}",
+                                    exchange::surface_field(me), flow_name_, flow_window,
+                                    point_count_, flow.surface_elevation.size()));
+  }
   std::erase_if(cache_, [&](const auto& item) { return item.first < flow_window - 1; });
   cache_[flow_window] = flow;
   return flow;
@@ -43,7 +53,8 @@ AmbientFlow SolidLink::receive(int64_t flow_window) {
 std::pair<AmbientFlow, AmbientFlow> SolidLink::ambient(const Window& window) {
   if (flow_name_.empty()) {
     AmbientFlow still{std::vector<Eigen::Vector3d>(point_count_, Eigen::Vector3d::Zero()),
-                      std::vector<double>(point_count_, 0.0)};
+                      std::vector<double>(point_count_, 0.0),
+                      std::vector<double>(point_count_, -std::numeric_limits<double>::infinity())};
     return {still, still};
   }
   const auto windows = exchange::flow_windows_for_solid(window.index, serial_);
@@ -52,28 +63,43 @@ std::pair<AmbientFlow, AmbientFlow> SolidLink::ambient(const Window& window) {
   return {std::move(begin), std::move(end)};
 }
 
-FlowLink::FlowLink(Participant& participant, const scenario::Scene& scene)
-    : participant_(participant) {
+FlowLink::FlowLink(Participant& participant, const scenario::Scene& scene, SolverFrame frame)
+    : participant_(participant), frame_(frame) {
   for (const auto* solid : scene.solids()) solids_.push_back(solid->acts_as);
 }
 
-std::vector<SolidState> FlowLink::receive_solids(const Window& window) {
+std::vector<SolidForcing> FlowLink::receive_solids(const Window& window) {
   const int64_t solid_window = exchange::solid_window_for_flow(window.index);
-  std::vector<SolidState> states;
+  // The drag of window k-1 acted on the solids for dt_{k-1}; spread over dt_k it gives the flow
+  // the same impulse (adaptive windows change length).
+  const double impulse_scale = window.dt > 0.0 ? previous_dt_ / window.dt : 0.0;
+  if (window.dt > 0.0) previous_dt_ = window.dt;
+  std::vector<SolidForcing> states;
   for (const auto& name : solids_) {
-    SolidState state;
-    state.name = name;
     auto what = [&](const char* field) {
       return fmt::format("field '{}' from '{}' (window {})", field, name, solid_window);
     };
-    state.positions = exchange::unpack(
+    const auto positions = exchange::unpack(
         participant_.receive(name, exchange::kPositions, solid_window), what(exchange::kPositions));
-    const std::size_t count = state.positions.size();
-    state.velocities =
+    const std::size_t count = positions.size();
+    const auto velocities =
         exchange::unpack(participant_.receive(name, exchange::kVelocities, solid_window), count,
                          what(exchange::kVelocities));
-    state.drag = exchange::unpack(participant_.receive(name, exchange::kDrag, solid_window), count,
-                                  what(exchange::kDrag));
+    const auto drag = exchange::unpack(participant_.receive(name, exchange::kDrag, solid_window),
+                                       count, what(exchange::kDrag));
+    SolidForcing state;
+    state.name = name;
+    state.positions.reserve(count);
+    state.velocities.reserve(count);
+    state.reaction.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      state.positions.push_back(frame_.to_solver(positions[i]));
+      state.velocities.push_back(frame_.to_solver(velocities[i]));
+      const Eigen::Vector3d reaction = -impulse_scale * drag[i];  // world [N]
+      state.reaction.push_back(frame_.force_to_solver(reaction));
+      booked_impulse_ += (reaction - frame_.out_of_plane(reaction)) * window.dt;
+      out_of_plane_impulse_ += frame_.out_of_plane(reaction) * window.dt;
+    }
     states.push_back(std::move(state));
   }
   return states;
@@ -81,10 +107,16 @@ std::vector<SolidState> FlowLink::receive_solids(const Window& window) {
 
 void FlowLink::publish_samples(const std::string& solid,
                                std::span<const Eigen::Vector3d> ambient_velocity,
-                               std::span<const double> water_fraction) {
-  participant_.publish(exchange::ambient_velocity_field(solid), exchange::pack(ambient_velocity));
+                               std::span<const double> water_fraction,
+                               std::span<const double> surface_elevation) {
+  std::vector<Eigen::Vector3d> world(ambient_velocity.size());
+  for (std::size_t i = 0; i < world.size(); ++i) world[i] = frame_.to_world(ambient_velocity[i]);
+  participant_.publish(exchange::ambient_velocity_field(solid), exchange::pack(world));
   participant_.publish(exchange::water_fraction_field(solid),
                        std::vector<double>(water_fraction.begin(), water_fraction.end()));
+  std::vector<double> surface(surface_elevation.begin(), surface_elevation.end());
+  if (surface.empty()) surface.assign(water_fraction.size(), std::nan(""));
+  participant_.publish(exchange::surface_field(solid), surface);
 }
 
 }  // namespace cosim::coupler

@@ -99,7 +99,7 @@ Window Participant::next_window() {
         case cosim_msgs::window_t::COMMAND_HANDSHAKE:
           // Handshakes queued up while a long initialisation ran need one answer, not one each.
           if (seconds_since(last_ready_) >= options_.resend_interval) {
-            publish_state(cosim_msgs::status_t::STATE_READY, 0, 0.0, "");
+            publish_state(cosim_msgs::status_t::STATE_READY, 0, 0.0, declaration_);
             last_ready_ = Clock::now();
           }
           break;

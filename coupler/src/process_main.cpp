@@ -7,6 +7,8 @@
 
 #include <cstdlib>
 
+#include "cosim/coupler/frame.hpp"
+
 namespace cosim::coupler {
 
 scenario::Section ProcessContext::section() {
@@ -19,6 +21,14 @@ std::filesystem::path ProcessContext::output_dir() const {
   const auto folder = run_dir / acts_as;
   std::filesystem::create_directories(folder);
   return folder;
+}
+
+void ProcessContext::declare_frame(int dimension, double span, const Eigen::Vector3d& gravity) {
+  FrameDeclaration declaration;
+  declaration.dimension = dimension;
+  declaration.span = dimension == 2 ? span : 0.0;
+  declaration.gravity = gravity;
+  participant->declare(declaration.to_json());
 }
 
 void ProcessContext::maybe_inject_fault(int64_t window) const {
@@ -120,6 +130,7 @@ int run_process(int argc, char** argv, const std::string& program,
     options.loss_probability = loss;
     options.loss_seed = std::hash<std::string>{}(section_name) ^ static_cast<uint64_t>(run_id);
     context.participant = std::make_unique<Participant>(options);
+    context.declare_frame(3, 0.0, context.scene.world.gravity);
   } catch (const std::exception& error) {
     spdlog::error("{}", error.what());
     return 2;

@@ -1,5 +1,7 @@
 #include "fluid_config.hpp"
 
+#include <fmt/format.h>
+
 namespace cosim::mps {
 
 using scenario::Range;
@@ -13,7 +15,6 @@ MpsParameters parse_parameters(scenario::Section& section) {
   p.density = section.number("density", p.density, Range::positive());
   p.kinematic_viscosity =
       section.number("kinematic_viscosity", p.kinematic_viscosity, Range::non_negative());
-  p.gravity = section.vector3("gravity", p.gravity);
   p.radius_density_over_l0 =
       section.number("radius_density_over_l0", p.radius_density_over_l0, Range::between(1.0, 10.0));
   p.radius_gradient_over_l0 = section.number("radius_gradient_over_l0", p.radius_gradient_over_l0,
@@ -89,7 +90,6 @@ SceneSettings parse_scene(scenario::Section scene, double gravity) {
   } else if (s.kind == "periodic_channel") {
     s.length = scene.number("length", Range::positive());
     s.depth = scene.number("depth", Range::positive());
-    s.slope = scene.number("slope", 0.0, Range::between(-0.5, 0.5));
     s.driving_pressure_drop = scene.number("driving_pressure_drop", 0.0);
   } else if (s.kind == "pool_fishway" || s.kind == "periodic_pool") {
     FishwayGeometry& g = s.fishway;
@@ -123,7 +123,6 @@ SceneSettings parse_scene(scenario::Section scene, double gravity) {
   } else {
     s.length = scene.number("length", Range::positive());
     s.depth = scene.number("initial_depth", Range::non_negative());
-    s.slope = scene.number("slope", 0.0, Range::between(-0.5, 0.5));
     s.block_height = scene.number("block_height", Range::positive());
     s.block_columns = scene.integer("block_columns", s.block_columns, Range::between(1, 100));
     s.pool_particles = scene.integer("pool_particles", s.pool_particles, Range::between(1, 1e7));
@@ -136,9 +135,22 @@ SceneSettings parse_scene(scenario::Section scene, double gravity) {
 
 }  // namespace
 
-FluidConfig parse_config(scenario::Section& section, double scene_output_interval) {
+FluidConfig parse_config(scenario::Section& section, const scenario::Scene& world_scene) {
+  const double scene_output_interval = world_scene.output_interval;
   FluidConfig config;
   config.parameters = parse_parameters(section);
+  // The world frame (docs/architecture.md): a 2D fluid computes in the world's x-z plane, which
+  // the library holds as its (x, y); it stands for a slice `span` wide along y.
+  config.span = section.number("span", 1.0, Range::positive());
+  config.frame = coupler::SolverFrame(config.parameters.dimension, config.span);
+  const Eigen::Vector3d& gravity = world_scene.world.gravity;
+  if (config.parameters.dimension == 2 && gravity.y() != 0.0) {
+    throw scenario::ScenarioError(fmt::format(
+        "{}: key 'world.gravity': a 2D fluid lives in the x-z plane; gravity ({}, {}, {}) has a "
+        "y component",
+        world_scene.file.string(), gravity.x(), gravity.y(), gravity.z()));
+  }
+  config.parameters.gravity = config.frame.to_solver(gravity);
   if (section.has("restart")) {
     auto restart = section.child("restart");
     config.restart = RestartSettings{restart.existing_file("file"), restart.integer("frame", -1)};
@@ -148,10 +160,11 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
   for (auto& partition :
        section.has("partitions") ? section.list("partitions") : std::vector<scenario::Section>{}) {
+    // World [x, z] of the partition's ends (the fluid's plane).
     const auto a = partition.numbers("from");
     const auto b = partition.numbers("to");
-    if (a.size() != 2) partition.fail("from", "expected [x, y]");
-    if (b.size() != 2) partition.fail("to", "expected [x, y]");
+    if (a.size() != 2) partition.fail("from", "expected [x, z]");
+    if (b.size() != 2) partition.fail("to", "expected [x, z]");
     config.parameters.partitions.push_back(
         PartitionSegment{{a[0], a[1]}, {b[0], b[1]}, partition.flag("keep_walls", true)});
   }
@@ -163,7 +176,8 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
       observe.fail("points", "expected a flat list of x, y, z triples");
     }
     for (std::size_t i = 0; i < flat.size(); i += 3) {
-      observation.points.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
+      observation.points.push_back(
+          config.frame.to_solver(Eigen::Vector3d(flat[i], flat[i + 1], flat[i + 2])));
     }
     observation.radius =
         observe.number("radius", 2.0 * config.parameters.particle_spacing, Range::positive());
@@ -172,7 +186,6 @@ FluidConfig parse_config(scenario::Section& section, double scene_output_interva
   }
   const double spacing = config.parameters.particle_spacing;
   config.sample_radius = section.number("sample_radius", 2.0 * spacing, Range::positive());
-  config.spanwise_spacing = section.number("spanwise_spacing", 1.0, Range::positive());
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());
   if (section.has("reference")) {

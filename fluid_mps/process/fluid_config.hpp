@@ -10,6 +10,8 @@
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fishway.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/coupler/frame.hpp"
+#include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
 
 namespace cosim::mps {
@@ -20,7 +22,7 @@ struct SceneSettings {
   double column_width = 0, column_height = 0;  // dam_break
   double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
   double tank_length = 0, tank_height = 0;
-  double length = 0, slope = 0;      // channels: length; periodic_channel: slope = sin(theta)
+  double length = 0;                 // channels (the bed slope is the world's gravity tilt)
   double driving_pressure_drop = 0;  // periodic_channel: p(x_min) - p(x_max) [Pa]
   double block_height = 0;           // open_channel: height of the soluble moving wall block
   int block_columns = 4, pool_particles = 400;
@@ -60,12 +62,14 @@ struct FluidConfig {
   SceneSettings scene;
   std::optional<RestartSettings> restart;
   double sample_radius = 0;     // ensemble-average radius around solid nodes (seed 000 r_ev)
-  double spanwise_spacing = 1;  // 2D: solids' forces are spread over this depth [m]
+  double span = 1;              // 2D: the width along y the slice stands for [m]
+  coupler::SolverFrame frame;   // world <-> the library's coordinates
   double output_interval = 0;
   std::optional<ReferenceSettings> reference;
   std::optional<ObservationSettings> observation;
 };
 
-FluidConfig parse_config(scenario::Section& section, double scene_output_interval);
+// `scene`: the top level, already read (output interval, the world's gravity).
+FluidConfig parse_config(scenario::Section& section, const scenario::Scene& scene);
 
 }  // namespace cosim::mps

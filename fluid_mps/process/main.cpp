@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/process_main.hpp"
@@ -24,8 +25,9 @@ mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings&
                           scene.tank_height, scene.wall_layers, scene.dummy_layers);
   }
   if (scene.kind == "periodic_channel") {
-    return mps::periodic_channel(parameters, scene.length, scene.depth, scene.slope,
-                                 scene.wall_layers, scene.dummy_layers);
+    // Slope 0: the bed slope is already in the world's gravity.
+    return mps::periodic_channel(parameters, scene.length, scene.depth, 0.0, scene.wall_layers,
+                                 scene.dummy_layers);
   }
   if (scene.kind == "pool_fishway") {
     return mps::pool_fishway(parameters, scene.inflow, scene.fishway, scene.weirs,
@@ -42,18 +44,22 @@ mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings&
   if (scene.kind == "open_channel") {
     return mps::open_channel(parameters, scene.inflow, scene.length, scene.depth,
                              scene.block_height, scene.block_columns, scene.pool_particles,
-                             scene.wall_layers, scene.dummy_layers, scene.slope);
+                             scene.wall_layers, scene.dummy_layers, 0.0);
   }
   return mps::still_water_tank(parameters, scene.width, scene.depth, scene.tank_height,
                                scene.wall_layers, scene.dummy_layers);
 }
 
-// An output frame holds everything a restart needs: positions, velocities, pressures, kinds.
-output::PointFrame make_frame(const mps::FluidSystem& system) {
+// An output frame holds everything a restart needs: positions, velocities, pressures, kinds, in
+// the world frame (a 2D fluid in the x-z plane), so ParaView shows it with the solids.
+output::PointFrame make_frame(const mps::FluidSystem& system, const coupler::SolverFrame& world) {
   output::PointFrame frame;
   frame.time = system.time();
-  frame.positions = system.positions();
-  frame.vectors["velocity"] = system.velocities();
+  frame.positions.reserve(system.positions().size());
+  for (const auto& x : system.positions()) frame.positions.push_back(world.to_world(x));
+  auto& velocity = frame.vectors["velocity"];
+  velocity.reserve(system.velocities().size());
+  for (const auto& u : system.velocities()) velocity.push_back(world.to_world(u));
   frame.scalars["pressure"] = system.pressures();
   frame.scalars["number_density"] = system.number_densities();
   auto& kinds = frame.labels["kind"];
@@ -61,11 +67,12 @@ output::PointFrame make_frame(const mps::FluidSystem& system) {
   return frame;
 }
 
-mps::MpsState state_from_frame(const mps::RestartSettings& restart) {
+mps::MpsState state_from_frame(const mps::RestartSettings& restart,
+                               const coupler::SolverFrame& world) {
   const auto frame = output::read_point_frame(restart.file, restart.frame);
   mps::MpsState state;
   state.time = frame.time;
-  state.positions = frame.positions;
+  for (const auto& x : frame.positions) state.positions.push_back(world.to_solver(x));
   auto require = [&](const auto& map, const char* name) -> const auto& {
     const auto found = map.find(name);
     if (found == map.end()) {
@@ -74,7 +81,9 @@ mps::MpsState state_from_frame(const mps::RestartSettings& restart) {
     }
     return found->second;
   };
-  state.velocities = require(frame.vectors, "velocity");
+  for (const auto& u : require(frame.vectors, "velocity")) {
+    state.velocities.push_back(world.to_solver(u));
+  }
   state.pressures = require(frame.scalars, "pressure");
   for (const int kind : require(frame.labels, "kind")) {
     state.kinds.push_back(static_cast<mps::ParticleKind>(kind));
@@ -87,13 +96,15 @@ mps::MpsState state_from_frame(const mps::RestartSettings& restart) {
 int main(int argc, char** argv) {
   return coupler::run_process(argc, argv, "fluid_mps", [](coupler::ProcessContext& context) {
     auto section = context.section();
-    mps::FluidConfig config = mps::parse_config(section, context.scene.output_interval);
+    mps::FluidConfig config = mps::parse_config(section, context.scene);
+    context.declare_frame(config.parameters.dimension, config.span,
+                          config.frame.to_world(config.parameters.gravity));
     mps::ParticleSet particles = build_scene(config.parameters, config.scene);
     std::unique_ptr<mps::FluidSystem> system;
     std::unique_ptr<mps::OpenBoundaries> open_boundaries;
     if (config.restart) {
-      system =
-          std::make_unique<mps::FluidSystem>(config.parameters, state_from_frame(*config.restart));
+      system = std::make_unique<mps::FluidSystem>(config.parameters,
+                                                  state_from_frame(*config.restart, config.frame));
       spdlog::info("restarted from {} frame {} at t = {:.6g} s", config.restart->file.string(),
                    config.restart->frame, system->time());
     } else {
@@ -117,28 +128,25 @@ int main(int argc, char** argv) {
                  config.parameters.particle_spacing, system->stable_dt());
 
     auto& participant = *context.participant;
-    coupler::FlowLink link(participant, context.scene);
+    coupler::FlowLink link(participant, context.scene, config.frame);
     output::PointSeriesWriter writer(context.output_dir() / "particles", "fluid_mps");
     std::optional<mps::ReferenceTracker> reference;
     if (config.reference && !fishway) {
       reference.emplace(*config.reference, -config.parameters.gravity.y());
     }
-    const double force_scale =
-        config.parameters.dimension == 2 ? 1.0 / config.spanwise_spacing : 1.0;
 
     double next_output = system->time();
     int64_t steps = 0, pcg_iterations = 0;
     int most_pcg_iterations = 0;
     Eigen::Vector3d undelivered = Eigen::Vector3d::Zero();
     mps::FluidImpulses impulses;  // momentum the fluid received, by source
-    double previous_dt = 0.0;     // window 1 applies the solids' window-0 drag, which is zero
-    std::vector<double> water;
+    std::vector<double> water, surface;
     while (true) {
       const coupler::Window window = participant.next_window();
       context.maybe_inject_fault(window.index);
       if (window.finish) {
         if (system->time() > next_output - config.output_interval * 0.5)
-          writer.write_frame(make_frame(*system));
+          writer.write_frame(make_frame(*system, config.frame));
         coupler::MetricsReport report;
         if (reference) reference->report(report);
         if (fishway) fishway->report(report);
@@ -154,36 +162,37 @@ int main(int argc, char** argv) {
         report.info()["steps"] = steps;
         report.info()["mean_pcg_iterations"] = steps > 0 ? double(pcg_iterations) / steps : 0.0;
         report.info()["most_pcg_iterations"] = most_pcg_iterations;
-        report.info()["undelivered_solid_force_impulse"] = {undelivered.x(), undelivered.y(),
-                                                            undelivered.z()};
-        report.info()["solid_reaction_impulse"] = {impulses.solids.x(), impulses.solids.y(),
-                                                   impulses.solids.z()};
+        // World impulses [N s]: handed over by the link, actually received by the fluid
+        // particles, not deliverable (no fluid near a solid point; out of a 2D plane).
+        auto world_impulse = [&](const Eigen::Vector3d& solver_impulse) {
+          const Eigen::Vector3d w = config.frame.force_to_world(solver_impulse);
+          return nlohmann::json::array({w.x(), w.y(), w.z()});
+        };
+        const auto& booked = link.booked_impulse();
+        const auto& out_of_plane = link.out_of_plane_impulse();
+        report.info()["booked_solid_reaction_impulse"] = {booked.x(), booked.y(), booked.z()};
+        report.info()["solid_reaction_impulse"] = world_impulse(impulses.solids);
+        report.info()["undelivered_solid_force_impulse"] = world_impulse(undelivered);
+        report.info()["out_of_plane_solid_force_impulse"] = {out_of_plane.x(), out_of_plane.y(),
+                                                             out_of_plane.z()};
         participant.finished(report.dump());
         return;
       }
       auto solids = link.receive_solids(window);
       int window_steps = 0;
       if (window.dt > 0.0) {
-        // The solids' drag of the previous window acts on the fluid with the opposite sign,
-        // scaled so that the impulse equals the one the solids took (momentum conservation
-        // also when adaptive windows change length).
-        const double impulse_scale = previous_dt / window.dt;
-        for (const auto& solid : solids) {
-          std::vector<Eigen::Vector3d> reaction(solid.drag.size());
-          for (std::size_t i = 0; i < reaction.size(); ++i) {
-            reaction[i] = -force_scale * impulse_scale * solid.drag[i];
-            impulses.solids += reaction[i] * window.dt;
-          }
-          const auto delivery =
-              system->apply_point_forces(solid.positions, reaction, config.sample_radius);
-          undelivered += delivery.undelivered_force * window.dt;
-        }
-        previous_dt = window.dt;
+        // The link hands over minus the solids' drag of the previous window, in the fluid's
+        // plane and per span width, rescaled to this window; it acts in every step of it.
+        std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> forces;
+        for (const auto& solid : solids) forces.emplace_back(solid.positions, solid.reaction);
+        const auto delivery = system->set_point_forces(forces, config.sample_radius);
+        undelivered += delivery.undelivered_force * window.dt;
         // The window is the fluid step; a window beyond the stable step is split.
         const int pieces =
             std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));
         for (int piece = 0; piece < pieces; ++piece) {
           const auto step = system->step(window.dt / pieces);
+          impulses.solids += step.external_impulse;
           impulses.wall_viscous += step.wall_viscous_force * (window.dt / pieces);
           impulses.wall_collision += step.wall_collision_impulse;
           impulses.wall_pressure += step.wall_pressure_impulse;
@@ -194,6 +203,7 @@ int main(int argc, char** argv) {
           ++window_steps;
         }
         steps += window_steps;
+        system->set_point_forces({}, config.sample_radius);
       }
       if (observation) observation->record(*system);
       if (reference) reference->observe(*system, impulses, observation ? &*observation : nullptr);
@@ -201,10 +211,11 @@ int main(int argc, char** argv) {
       for (const auto& solid : solids) {
         const auto velocity =
             system->sample_velocity(solid.positions, config.sample_radius, &water);
-        link.publish_samples(solid.name, velocity, water);
+        system->sample_surface(solid.positions, config.sample_radius, surface);
+        link.publish_samples(solid.name, velocity, water, surface);
       }
       if (system->time() >= next_output - 1e-9 * config.output_interval) {
-        writer.write_frame(make_frame(*system));
+        writer.write_frame(make_frame(*system, config.frame));
         next_output += config.output_interval;
       }
       participant.done(window_steps, system->stable_dt());

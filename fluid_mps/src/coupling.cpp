@@ -1,5 +1,8 @@
 // Coupling hooks of FluidSystem: velocity sampling, point forces, momentum.
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "cosim/fluid_mps/fluid_system.hpp"
@@ -58,27 +61,101 @@ std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
   return velocity;
 }
 
-ForceDelivery FluidSystem::apply_point_forces(const std::vector<Eigen::Vector3d>& points,
-                                              const std::vector<Eigen::Vector3d>& forces,
-                                              double radius) {
-  if (points.size() != forces.size()) {
-    throw std::invalid_argument("apply_point_forces: points and forces differ in size");
-  }
-  const auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+ForceDelivery FluidSystem::set_point_forces(const std::vector<Eigen::Vector3d>& points,
+                                            const std::vector<Eigen::Vector3d>& forces,
+                                            double radius) {
+  return set_point_forces({{points, forces}}, radius);
+}
+
+ForceDelivery FluidSystem::set_point_forces(
+    const std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>>&
+        point_forces,
+    double radius) {
+  std::fill(external_accelerations_.begin(), external_accelerations_.end(),
+            Eigen::Vector3d::Zero());
   ForceDelivery delivery;
-  // Serial accumulation in point order: deterministic.
-  for (std::size_t q = 0; q < points.size(); ++q) {
-    const auto& group = groups[q];
-    if (group.empty()) {
-      ++delivery.undelivered_points;
-      delivery.undelivered_force += forces[q];
-      continue;
+  for (const auto& [points, forces] : point_forces) {
+    if (points.size() != forces.size()) {
+      throw std::invalid_argument("set_point_forces: points and forces differ in size");
     }
-    const Eigen::Vector3d acceleration =
-        forces[q] / (particle_mass_ * static_cast<double>(group.size()));
-    for (int j : group) external_accelerations_[j] += acceleration;
+    if (points.empty()) continue;
+    const auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+    // Serial accumulation in point order: deterministic.
+    for (std::size_t q = 0; q < points.size(); ++q) {
+      const auto& group = groups[q];
+      if (group.empty()) {
+        ++delivery.undelivered_points;
+        delivery.undelivered_force += forces[q];
+        continue;
+      }
+      const Eigen::Vector3d acceleration =
+          forces[q] / (particle_mass_ * static_cast<double>(group.size()));
+      for (int j : group) external_accelerations_[j] += acceleration;
+    }
   }
   return delivery;
+}
+
+void FluidSystem::sample_surface(const std::vector<Eigen::Vector3d>& points, double radius,
+                                 std::vector<double>& surface) const {
+  if (!(radius > 0.0)) throw std::invalid_argument("sampling radius must be positive");
+  const bool planar = parameters_.dimension == 2;
+  const int vertical = planar ? 1 : 2;
+  const double l0 = parameters_.particle_spacing;
+  const auto& periodic = parameters_.periodic;
+  constexpr double kNoWater = -std::numeric_limits<double>::infinity();
+  surface.assign(points.size(), kNoWater);
+  // Horizontal coordinates of a position: (x, 0) in 2D, (x, y) in 3D.
+  auto horizontal = [&](const Eigen::Vector3d& x) {
+    return Eigen::Vector2d(periodic.fold(x.x()), planar ? 0.0 : x.y());
+  };
+  Eigen::AlignedBox2d box;
+  for (int i = 0; i < particle_count(); ++i) {
+    if (kinds_[i] == ParticleKind::fluid) box.extend(horizontal(positions_[i]));
+  }
+  if (box.isEmpty() || points.empty()) return;
+  if (periodic.enabled) {
+    box.min().x() = periodic.x_min;
+    box.max().x() = periodic.x_max;
+  }
+  // Highest fluid particle per column l0 wide, then the highest column within the radius of each
+  // point (across the seam of a periodic run; the drop of a stepped period is not applied).
+  const Eigen::Vector2d origin = box.min();
+  const int nx = std::max(1, static_cast<int>(std::ceil((box.max().x() - origin.x()) / l0)));
+  const int ny = planar ? 1 : static_cast<int>((box.max().y() - origin.y()) / l0) + 1;
+  std::vector<double> top(static_cast<std::size_t>(nx) * ny, kNoWater);
+  for (int i = 0; i < particle_count(); ++i) {
+    if (kinds_[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector2d h = horizontal(positions_[i]);
+    const int cx = std::clamp(static_cast<int>((h.x() - origin.x()) / l0), 0, nx - 1);
+    const int cy = std::clamp(static_cast<int>((h.y() - origin.y()) / l0), 0, ny - 1);
+    double& t = top[static_cast<std::size_t>(cy) * nx + cx];
+    t = std::max(t, positions_[i][vertical]);
+  }
+  const int reach = static_cast<int>(std::ceil(radius / l0)) + 1;
+  const int reach_y = planar ? 0 : reach;
+  for (std::size_t q = 0; q < points.size(); ++q) {
+    const Eigen::Vector2d p = horizontal(points[q]);
+    const int cx = static_cast<int>(std::floor((p.x() - origin.x()) / l0));
+    const int cy = static_cast<int>(std::floor((p.y() - origin.y()) / l0));
+    double highest = kNoWater;
+    for (int dy = -reach_y; dy <= reach_y; ++dy) {
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const int y = cy + dy;
+        int x = cx + dx;
+        if (periodic.enabled) x = ((x % nx) + nx) % nx;
+        if (x < 0 || x >= nx || y < 0 || y >= ny) continue;
+        // Distance from the point to the nearest edge of the column.
+        const double gap_x =
+            std::max(0.0, std::abs(origin.x() + (cx + dx + 0.5) * l0 - p.x()) - 0.5 * l0);
+        const double gap_y =
+            planar ? 0.0 : std::max(0.0, std::abs(origin.y() + (y + 0.5) * l0 - p.y()) - 0.5 * l0);
+        if (gap_x * gap_x + gap_y * gap_y > radius * radius) continue;
+        highest = std::max(highest, top[static_cast<std::size_t>(y) * nx + x]);
+      }
+    }
+    if (highest > kNoWater) surface[q] = highest + 0.5 * l0;
+  }
 }
 
 Eigen::Vector3d FluidSystem::total_fluid_momentum() const {

@@ -261,7 +261,11 @@ StepReport FluidSystem::step(double dt) {
     }
     position_star[i] += dt * velocity_star[i];
   }
-  for (int i = 0; i < n; ++i) report.wall_viscous_force += wall_viscous[i];
+  for (int i = 0; i < n; ++i) {
+    report.wall_viscous_force += wall_viscous[i];
+    if (is_fluid(kinds_[i])) report.external_impulse += external_accelerations_[i];
+  }
+  report.external_impulse *= particle_mass_ * dt;
   report.wall_viscous_force *= particle_mass_ * viscous_factor;
   for (int i = 0; i < n; ++i) {
     if (!position_star[i].allFinite() || !velocity_star[i].allFinite()) {
@@ -462,8 +466,7 @@ StepReport FluidSystem::step(double dt) {
   }
   velocities_ = std::move(next_velocity);
   pressures_ = std::move(pressure);
-  std::fill(external_accelerations_.begin(), external_accelerations_.end(),
-            Eigen::Vector3d::Zero());
+  // The point forces stay for the next step of the same window (set_point_forces).
   time_ += dt;
   step_ = this_step;
   for (int i = 0; i < n; ++i) {

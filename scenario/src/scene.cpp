@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace cosim::scenario {
 
@@ -48,7 +49,40 @@ const ParticipantEntry& Scene::participant(const std::string& acts_as) const {
   throw ScenarioError(fmt::format("{}: no participant '{}' in this scene", file.string(), acts_as));
 }
 
+Eigen::Vector3d slope_gravity(double slope_degrees, double g) {
+  const double theta = slope_degrees * std::numbers::pi / 180.0;
+  return {g * std::sin(theta), 0.0, -g * std::cos(theta)};
+}
+
 namespace {
+
+// `world: {gravity: [gx, gy, gz]}`, or a bed slope, `slope_degrees` or `bed_slope` (sin theta),
+// with `gravity_magnitude`; one of the three.
+WorldSettings parse_world(Section world) {
+  WorldSettings settings;
+  if (world.has("slope_degrees") && world.has("bed_slope")) {
+    world.fail("bed_slope", "give either 'slope_degrees' or 'bed_slope' (sin theta), not both");
+  }
+  if (world.has("gravity")) {
+    for (const char* key : {"slope_degrees", "bed_slope", "gravity_magnitude"}) {
+      if (world.has(key)) world.fail(key, "give either 'gravity' or the slope, not both");
+    }
+    settings.gravity = world.vector3("gravity");
+    if (!settings.gravity.allFinite() || settings.gravity.norm() > 1000.0) {
+      world.fail("gravity", "must be a finite vector of at most 1000 m/s^2");
+    }
+    return settings;
+  }
+  if (world.has("bed_slope")) {
+    const double sine = world.number("bed_slope", Range::between(-0.866, 0.866));
+    settings.slope_degrees = std::asin(sine) * 180.0 / std::numbers::pi;
+  } else {
+    settings.slope_degrees = world.number("slope_degrees", 0.0, Range::between(-60.0, 60.0));
+  }
+  const double g = world.number("gravity_magnitude", 9.81, Range::between(0.0, 1000.0));
+  settings.gravity = slope_gravity(settings.slope_degrees, g);
+  return settings;
+}
 
 CouplingSettings parse_coupling(Section coupling) {
   CouplingSettings settings;
@@ -78,6 +112,7 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
   scene.description = root.text("description", "");
   scene.duration = root.number("duration", Range::positive());
   scene.coupling = parse_coupling(root.child("coupling"));
+  scene.world = parse_world(root.optional_child("world"));
   scene.output_interval = root.number("output_interval", scene.duration / 100.0, Range::positive());
 
   Section participants = root.child("participants");

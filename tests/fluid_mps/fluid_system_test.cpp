@@ -59,17 +59,44 @@ TEST(MpsFluidSystem, PointForcesGiveExactlySumOfForcesTimesDt) {
   const std::vector<Eigen::Vector3d> points{{9.0 * l0, 0.0, 0.0}, {30.0 * l0, 0.0, 0.0}};
   const std::vector<Eigen::Vector3d> forces{{1.5, -0.25, 0.0}, {-0.3, 0.7, 0.0}};
   const Eigen::Vector3d before = system.total_fluid_momentum();
-  const ForceDelivery delivery = system.apply_point_forces(points, forces, 13.0 * l0);
+  const ForceDelivery delivery = system.set_point_forces(points, forces, 13.0 * l0);
   EXPECT_EQ(delivery.undelivered_points, 0);
   const double dt = 1e-4;
-  system.step(dt);
+  const StepReport step = system.step(dt);
   const Eigen::Vector3d gained = system.total_fluid_momentum() - before;
   const Eigen::Vector3d expected = (forces[0] + forces[1]) * dt;
   EXPECT_LT((gained - expected).norm(), 1e-12 * expected.norm() + 1e-15);
-  // The forces act for one step only.
+  EXPECT_LT((step.external_impulse - expected).norm(), 1e-12 * expected.norm());
+  // Cleared by an empty set: no more momentum.
+  system.set_point_forces({}, {}, 13.0 * l0);
   const Eigen::Vector3d after_first = system.total_fluid_momentum();
   system.step(dt);
   EXPECT_LT((system.total_fluid_momentum() - after_first).norm(), 1e-15);
+}
+
+// A coupling window longer than the stable step is split into several fluid steps: the forces
+// act in every one of them, so the fluid receives the whole window's impulse (it used to get
+// only the first step's share while the full impulse was booked).
+TEST(MpsFluidSystem, PointForcesActInEveryStepOfASplitWindow) {
+  MpsParameters p = small_parameters();
+  p.gravity.setZero();
+  const double l0 = p.particle_spacing;
+  const std::vector<Eigen::Vector3d> points{{9.0 * l0, 0.0, 0.0}, {30.0 * l0, 0.0, 0.0}};
+  const std::vector<Eigen::Vector3d> forces{{1.5, -0.25, 0.0}, {-0.3, 0.7, 0.0}};
+  const double window = 3e-4;
+  const Eigen::Vector3d window_impulse = (forces[0] + forces[1]) * window;
+  for (const int pieces : {2, 3, 4}) {
+    FluidSystem system(p, isolated_particles(8, 6.0 * l0));
+    const Eigen::Vector3d before = system.total_fluid_momentum();
+    system.set_point_forces(points, forces, 13.0 * l0);
+    Eigen::Vector3d delivered = Eigen::Vector3d::Zero();
+    for (int piece = 0; piece < pieces; ++piece) {
+      delivered += system.step(window / pieces).external_impulse;
+    }
+    const Eigen::Vector3d gained = system.total_fluid_momentum() - before;
+    EXPECT_LT((gained - window_impulse).norm(), 1e-12 * window_impulse.norm()) << pieces;
+    EXPECT_LT((delivered - window_impulse).norm(), 1e-12 * window_impulse.norm()) << pieces;
+  }
 }
 
 TEST(MpsFluidSystem, ForcesWithNoFluidNearbyAreReported) {
@@ -77,7 +104,7 @@ TEST(MpsFluidSystem, ForcesWithNoFluidNearbyAreReported) {
   p.gravity.setZero();
   FluidSystem system(p, isolated_particles(3, 0.06));
   const ForceDelivery delivery =
-      system.apply_point_forces({{0.0, 0.0, 0.0}, {0.0, 0.1, 0.0}}, {{1, 0, 0}, {0, 2, 0}}, 0.02);
+      system.set_point_forces({{0.0, 0.0, 0.0}, {0.0, 0.1, 0.0}}, {{1, 0, 0}, {0, 2, 0}}, 0.02);
   EXPECT_EQ(delivery.undelivered_points, 1);
   EXPECT_EQ(delivery.undelivered_force, Eigen::Vector3d(0, 2, 0));
 }

@@ -190,6 +190,33 @@ TEST(Runs, ReplayDetectsADifferentSolver) {
   EXPECT_NE(replayed.output.find("DIFFERENT"), std::string::npos) << replayed.output;
 }
 
+// One world: a recorded flow replayed into a scene whose world is tilted no longer shares the
+// beam's gravity. The coupler refuses at the handshake, naming both participants.
+TEST(Runs, ReplayIntoAnotherWorldIsRefusedAtTheHandshake) {
+  const auto runs = fresh_folder("replay-world");
+  const auto recorded =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
+  const auto run_dir = run_folder_of(recorded);
+  const auto scenario_file = run_dir / "scenario.yaml";
+  auto document = scenario::load_yaml_file(scenario_file);
+  document["world"] = YAML::Load("{slope_degrees: 5}");
+  {
+    std::ofstream out(scenario_file);
+    out << document;
+  }
+  const auto replayed =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run_dir.string(), runs.string()));
+  EXPECT_NE(replayed.exit_code, 0) << replayed.output;
+  EXPECT_NE(replayed.output.find("participants disagree on the world"), std::string::npos)
+      << replayed.output;
+  EXPECT_NE(replayed.output.find("'vegetation_beam' declares gravity (0.855"), std::string::npos)
+      << replayed.output;
+  EXPECT_NE(replayed.output.find("'prescribed_flow' declares (0, 0, -9.81)"), std::string::npos)
+      << replayed.output;
+}
+
 }  // namespace
 }  // namespace cosim::testing
 

@@ -1,7 +1,9 @@
 // Scenario files: checked values, errors naming file, line and key, and the resolved scenario.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "cosim/scenario/scene.hpp"
 
@@ -22,7 +24,9 @@ std::map<std::string, ParticipantParser> parsers() {
     section.integer("links", 10, Range::between(1, 100));
   };
   auto flow = [](Section& section, const Scene&) { section.vector3("velocity"); };
-  return {{"vegetation_beam", solid}, {"prescribed_flow", flow}, {"debris_dem", solid},
+  return {{"vegetation_beam", solid},
+          {"prescribed_flow", flow},
+          {"debris_dem", solid},
           {"replay", [](Section& section, const Scene&) { section.text("participant"); }}};
 }
 
@@ -110,6 +114,27 @@ TEST(Scene, ReplaysActAsTheirParticipant) {
   EXPECT_EQ(entry.name, "replay_dem");
   EXPECT_EQ(entry.executable, "replay");
   EXPECT_EQ(entry.role, Role::solid);
+}
+
+TEST(Scene, WorldGravityIsDeclaredOnceForTheScene) {
+  const auto plain = load_scene(write("world-plain", kScene), parsers());
+  EXPECT_EQ(plain.world.gravity, Eigen::Vector3d(0.0, 0.0, -9.81)) << "z up by default";
+  std::string sloped = kScene;
+  sloped.insert(sloped.find("coupling:"), "world:\n  slope_degrees: 15\n");
+  const auto flume = load_scene(write("world-slope", sloped), parsers());
+  const double theta = 15.0 * std::numbers::pi / 180.0;
+  EXPECT_NEAR(flume.world.gravity.x(), 9.81 * std::sin(theta), 1e-12);
+  EXPECT_EQ(flume.world.gravity.y(), 0.0);
+  EXPECT_NEAR(flume.world.gravity.z(), -9.81 * std::cos(theta), 1e-12);
+  std::string sine = kScene;
+  sine.insert(sine.find("coupling:"), "world:\n  bed_slope: 0.01\n");
+  const auto channel = load_scene(write("world-sine", sine), parsers());
+  EXPECT_NEAR(channel.world.gravity.x(), 9.81 * 0.01, 1e-12);
+  EXPECT_NEAR(channel.world.gravity.z(), -9.81 * std::sqrt(1.0 - 1e-4), 1e-12);
+  std::string both = kScene;
+  both.insert(both.find("coupling:"), "world:\n  gravity: [0, 0, -9.81]\n  slope_degrees: 3\n");
+  EXPECT_NE(error_of(both).find("key 'world.slope_degrees': give either"), std::string::npos)
+      << error_of(both);
 }
 
 }  // namespace

@@ -8,15 +8,16 @@
 namespace cosim::prescribed_flow {
 namespace {
 
+// Points at heights z above the bed (world frame: z up, the default bed normal).
 std::vector<Eigen::Vector3d> heights(std::initializer_list<double> zs) {
   std::vector<Eigen::Vector3d> points;
-  for (double z : zs) points.emplace_back(0.3, z, 0.0);
+  for (double z : zs) points.emplace_back(0.3, 0.0, z);
   return points;
 }
 
 TEST(PrescribedFlow, UniformFlowEverywhereBelowTheSurface) {
   ProfileSettings settings;
-  settings.velocity = {0.2, 0.0, 0.01};
+  settings.velocity = {0.2, 0.01, 0.0};
   settings.depth = 0.1;
   const PrescribedFlow flow(settings);
   std::vector<Eigen::Vector3d> velocity;
@@ -62,7 +63,7 @@ TEST(PrescribedFlow, LogLaw) {
   std::vector<double> water;
   flow.sample(0.0, heights({0.01, 5e-5}), velocity, water);
   EXPECT_NEAR(velocity[0].x(), 0.02 / 0.41 * std::log(100.0), 1e-12);
-  EXPECT_EQ(velocity[0].y(), 0.0);
+  EXPECT_EQ(velocity[0].z(), 0.0);
   EXPECT_EQ(velocity[1].x(), 0.0) << "below the roughness length";
 }
 
@@ -92,9 +93,9 @@ TEST(PrescribedFlow, Seed004CaptureProfileConservesDischarge) {
   for (double ponded : {0.04, 0.06, 0.1, 0.3}) {
     // The highest point upstream of the dam sets h_D.
     auto points = heights({});
-    points.emplace_back(0.95, ponded, 0.0);
+    points.emplace_back(0.95, 0.0, ponded);
     const int samples = 2000;
-    for (int i = 0; i <= samples; ++i) points.emplace_back(0.9, ponded * i / samples, 0.0);
+    for (int i = 0; i <= samples; ++i) points.emplace_back(0.9, 0.0, ponded * i / samples);
     EXPECT_DOUBLE_EQ(flow.ponded_depth(points), ponded);
     std::vector<Eigen::Vector3d> velocity;
     std::vector<double> water;

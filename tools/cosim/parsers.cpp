@@ -21,11 +21,11 @@ const std::map<std::string, scenario::ParticipantParser>& participant_parsers() 
        }},
       {"fluid_mps",
        [](scenario::Section& section, const scenario::Scene& scene) {
-         mps::parse_config(section, scene.output_interval);
+         mps::parse_config(section, scene);
        }},
       {"vegetation_beam",
        [](scenario::Section& section, const scenario::Scene& scene) {
-         vegetation::parse_config(section, scene.output_interval);
+         vegetation::parse_config(section, scene);
        }},
   };
   return parsers;

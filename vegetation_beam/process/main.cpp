@@ -122,8 +122,9 @@ int main(int argc, char** argv) {
   return coupler::run_process(argc, argv, "vegetation_beam", [](coupler::ProcessContext& context) {
     auto section = context.section();
     const vegetation::VegetationConfig config =
-        vegetation::parse_config(section, context.scene.output_interval);
+        vegetation::parse_config(section, context.scene);
     vegetation::PlantField field(config.plants, config.parameters);
+    context.declare_frame(3, 0.0, config.parameters.gravity);
     auto& participant = *context.participant;
     const auto node_count = static_cast<std::size_t>(field.node_count());
     coupler::SolidLink link(participant, context.scene, node_count);

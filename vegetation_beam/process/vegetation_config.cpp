@@ -12,7 +12,8 @@ namespace {
 void parse_plant_group(scenario::Section& group, std::vector<PlantSpec>& plants) {
   PlantSpec spec;
   spec.base = group.vector3("base");
-  spec.direction = group.vector3("direction", spec.direction);
+  // World frame (docs/architecture.md): z is up, so plants stand along +z unless told otherwise.
+  spec.direction = group.vector3("direction", Eigen::Vector3d::UnitZ());
   if (spec.direction.norm() == 0.0) group.fail("direction", "must not be zero");
   spec.length = group.number("length", Range::positive());
   spec.links = group.integer("links", 20, Range::between(1, 10000));
@@ -40,7 +41,8 @@ void parse_plant_group(scenario::Section& group, std::vector<PlantSpec>& plants)
 
 }  // namespace
 
-VegetationConfig parse_config(scenario::Section& section, double scene_output_interval) {
+VegetationConfig parse_config(scenario::Section& section, const scenario::Scene& scene) {
+  const double scene_output_interval = scene.output_interval;
   VegetationConfig config;
   BeamParameters& parameters = config.parameters;
   parameters.fluid_density =
@@ -49,7 +51,7 @@ VegetationConfig parse_config(scenario::Section& section, double scene_output_in
       section.number("drag_coefficient", parameters.drag_coefficient, Range::non_negative());
   parameters.added_mass_coefficient = section.number(
       "added_mass_coefficient", parameters.added_mass_coefficient, Range::non_negative());
-  parameters.gravity = section.vector3("gravity", parameters.gravity);
+  parameters.gravity = scene.world.gravity;  // the scene's one gravity (world.gravity)
   parameters.axial_damping_ratio = section.number(
       "axial_damping_ratio", parameters.axial_damping_ratio, Range::between(0.0, 10.0));
   parameters.bending_damping_ratio = section.number(

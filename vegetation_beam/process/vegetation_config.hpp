@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
 
@@ -37,6 +38,6 @@ struct VegetationConfig {
 };
 
 // `output_interval` is the scene's default for the section's own `output_interval`.
-VegetationConfig parse_config(scenario::Section& section, double scene_output_interval);
+VegetationConfig parse_config(scenario::Section& section, const scenario::Scene& scene);
 
 }  // namespace cosim::vegetation

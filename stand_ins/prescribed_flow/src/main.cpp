@@ -13,8 +13,8 @@ int main(int argc, char** argv) {
     const prescribed_flow::PrescribedFlow flow(prescribed_flow::parse_settings(section));
     auto& participant = *context.participant;
     coupler::FlowLink link(participant, context.scene);
-    // The flow cannot move, but it books the impulse the solids took from it (for momentum
-    // checks: it equals minus the impulse a real fluid would have received).
+    // The flow cannot move, but it books the impulse the solids took from it by the link's rule
+    // (for momentum checks: minus the impulse a real fluid would have received).
     Eigen::Vector3d impulse_on_solids = Eigen::Vector3d::Zero();
     std::vector<Eigen::Vector3d> velocity;
     std::vector<double> water;
@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
         return;
       }
       for (const auto& solid : link.receive_solids(window)) {
-        for (const auto& drag : solid.drag) impulse_on_solids += drag * window.dt;
+        for (const auto& reaction : solid.reaction) impulse_on_solids -= reaction * window.dt;
         flow.sample(window.end_time(), solid.positions, velocity, water);
         link.publish_samples(solid.name, velocity, water);
       }

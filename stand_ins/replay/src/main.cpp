@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
     spdlog::info("replaying '{}' from {} ({} windows recorded)", settings.participant,
                  settings.event_log.string(), recording.windows.size());
     auto& participant = *context.participant;
+    // It stands in for the recorded participant, so it declares that one's frame.
+    participant.declare(recording.declaration);
     while (true) {
       const coupler::Window window = participant.next_window();
       context.maybe_inject_fault(window.index);

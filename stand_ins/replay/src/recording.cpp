@@ -83,7 +83,9 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
       cosim_msgs::status_t status;
       if (status.decode(event.data, 0, event.datalen) < 0) return;
       if (status.header.run_id != recording.run_id || status.header.sender != participant) return;
-      if (status.state == cosim_msgs::status_t::STATE_DONE) {
+      if (status.state == cosim_msgs::status_t::STATE_READY) {
+        recording.declaration = status.message;
+      } else if (status.state == cosim_msgs::status_t::STATE_DONE) {
         auto& window = recording.windows[status.header.window];
         window.done = true;
         window.steps = status.steps;

@@ -5,7 +5,9 @@
 //   solid S publishes  "positions", "velocities" (3 per node or element) and "drag" (the mean
 //                      force the fluid exerted on each node over the window; the flow takes
 //                      minus it), all of window k;
-//   the flow publishes "ambient_velocity@S" (3 per node) and "water_fraction@S" (1 per node)
+//   the flow publishes "ambient_velocity@S" (3 per node), "water_fraction@S" (1 per node) and
+//                      "surface_elevation@S" (world z of the free surface above each node; NaN
+//                      when the flow does not know, -inf when there is no water above)
 //                      at the end of window k, sampled where S's nodes were at the end of the
 //                      window it read.
 // The flow in window k reads the solids' window k-1 (window 0: window 0). A solid in window k
@@ -32,6 +34,9 @@ inline std::string ambient_velocity_field(const std::string& solid) {
 }
 inline std::string water_fraction_field(const std::string& solid) {
   return "water_fraction@" + solid;
+}
+inline std::string surface_field(const std::string& solid) {
+  return "surface_elevation@" + solid;
 }
 
 // Window of the solids' data the flow uses in window `flow_window`.

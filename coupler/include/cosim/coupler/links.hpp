@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cosim/coupler/exchange.hpp"
+#include "cosim/coupler/frame.hpp"
 #include "cosim/coupler/participant.hpp"
 #include "cosim/scenario/scene.hpp"
 
@@ -19,6 +20,9 @@ namespace cosim::coupler {
 struct AmbientFlow {
   std::vector<Eigen::Vector3d> velocity;
   std::vector<double> water_fraction;  // 1 submerged, 0 dry
+  // World z of the free surface above each point; -inf: no water above; NaN: the flow does not
+  // know (use water_fraction).
+  std::vector<double> surface_elevation;
 };
 
 class SolidLink {
@@ -42,25 +46,49 @@ class SolidLink {
   std::map<int64_t, AmbientFlow> cache_;
 };
 
-struct SolidState {
+// One solid as the flow sees it in a window, in the flow's own coordinates (SolverFrame): where
+// its points are, how they move, and the force the flow must apply at each of them throughout
+// the window [N; N per metre of span in 2D].
+struct SolidForcing {
   std::string name;
   std::vector<Eigen::Vector3d> positions;
   std::vector<Eigen::Vector3d> velocities;
-  std::vector<Eigen::Vector3d> drag;
+  std::vector<Eigen::Vector3d> reaction;
 };
 
+// The flow's side of the exchange. It holds the exchange rules, so every flow provider follows
+// them alike:
+// - reaction sign: the flow takes minus the drag each solid reports;
+// - one-window lag: in window k it takes the drag of the solids' window k-1, rescaled by
+//   dt_{k-1} / dt_k so that the impulse it receives equals the one the solids took;
+// - frame: world positions, velocities and forces to the flow's own coordinates (2D: the x-z
+//   plane, forces per metre of span), samples back to the world;
+// - booking: the world impulse handed to the flow, and the out-of-plane part a 2D flow cannot
+//   take.
 class FlowLink {
  public:
-  FlowLink(Participant& participant, const scenario::Scene& scene);
+  FlowLink(Participant& participant, const scenario::Scene& scene, SolverFrame frame = {});
 
-  // Every solid's state as the flow uses it in `window` (exchange::solid_window_for_flow).
-  std::vector<SolidState> receive_solids(const Window& window);
+  std::vector<SolidForcing> receive_solids(const Window& window);
+  // Samples at the solid's points, in the flow's coordinates. surface_elevation: the vertical
+  // coordinate of the free surface above each point (empty: unknown).
   void publish_samples(const std::string& solid, std::span<const Eigen::Vector3d> ambient_velocity,
-                       std::span<const double> water_fraction);
+                       std::span<const double> water_fraction,
+                       std::span<const double> surface_elevation = {});
+
+  // World impulse [N s] of every reaction handed to the flow so far (the flow applies it over
+  // each window: reaction * dt summed), and the part a 2D flow has no place for (along y).
+  const Eigen::Vector3d& booked_impulse() const { return booked_impulse_; }
+  const Eigen::Vector3d& out_of_plane_impulse() const { return out_of_plane_impulse_; }
+  const SolverFrame& frame() const { return frame_; }
 
  private:
   Participant& participant_;
   std::vector<std::string> solids_;
+  SolverFrame frame_;
+  double previous_dt_ = 0.0;  // window 1 takes the solids' window-0 drag, which is zero
+  Eigen::Vector3d booked_impulse_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d out_of_plane_impulse_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace cosim::coupler

@@ -51,6 +51,11 @@ class Participant {
 
   const std::string& name() const { return options_.name; }
 
+  // The frame, dimension, span and gravity this participant computes in, sent with its answer
+  // to the handshake; the coupler refuses to start a run whose participants disagree. Call it
+  // before the first next_window().
+  void declare(const std::string& declaration_json) { declaration_ = declaration_json; }
+
   // Waits for the next window (answering the handshake and repeated windows on the way).
   Window next_window();
   // Publishes a field for the current window.
@@ -79,6 +84,7 @@ class Participant {
   Stamp stamp() const;
 
   ParticipantOptions options_;
+  std::string declaration_;
   std::unique_ptr<Bus> bus_;
   Window current_;
   bool current_done_ = false;

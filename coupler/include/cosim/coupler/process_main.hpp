@@ -26,6 +26,10 @@ class ProcessContext {
   scenario::Section section();
   // Output folder for this participant's files (created).
   std::filesystem::path output_dir() const;
+  // Declares this process's frame for the handshake: the dimension, the span of a 2D one, and
+  // the gravity [m/s^2, world frame] its physics actually uses. Until a process calls it, it
+  // declares 3D under the scene's world gravity. Call before the first window.
+  void declare_frame(int dimension, double span, const Eigen::Vector3d& gravity);
   // Called at the start of every window: carries out an injected fault when one is due.
   void maybe_inject_fault(int64_t window) const;
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "cosim/fluid_mps/kernels.hpp"
@@ -29,6 +30,8 @@ struct StepReport {
   Eigen::Vector3d wall_collision_impulse = Eigen::Vector3d::Zero();
   Eigen::Vector3d pressure_impulse = Eigen::Vector3d::Zero();
   Eigen::Vector3d wall_pressure_impulse = Eigen::Vector3d::Zero();
+  // Momentum the fluid received in this step from the point forces (set_point_forces).
+  Eigen::Vector3d external_impulse = Eigen::Vector3d::Zero();
 };
 
 // Result of apply_point_forces: forces of points with no fluid inside the radius are dropped.
@@ -85,11 +88,26 @@ class FluidSystem {
                                                double radius,
                                                std::vector<double>* water_fraction = nullptr) const;
 
-  // Forces [N in 3D, N/m in 2D] applied during the next step only, each shared equally by the
-  // fluid particles within `radius` (the adjoint of sample_velocity), so the momentum given is
-  // exactly sum(force) * dt. Forces of points with no fluid nearby are reported, not applied.
-  ForceDelivery apply_point_forces(const std::vector<Eigen::Vector3d>& points,
-                                   const std::vector<Eigen::Vector3d>& forces, double radius);
+  // Free-surface height above each point: the vertical coordinate (y in 2D, z in 3D) of the
+  // highest fluid particle within a horizontal distance `radius` of the point, plus l0 / 2 (the
+  // particle's own extent). -inf where no fluid lies in that column. A solid computes its
+  // submerged volume from it.
+  void sample_surface(const std::vector<Eigen::Vector3d>& points, double radius,
+                      std::vector<double>& surface) const;
+
+  // Forces [N in 3D, N/m in 2D] that replace the previous ones and act in every step until they
+  // are set again (a coupling window split into several fluid steps takes them in each), each
+  // shared equally by the fluid particles within `radius` at the time of the call (the adjoint
+  // of sample_velocity), so the momentum given per step is exactly sum(force) * dt
+  // (StepReport::external_impulse). Forces of points with no fluid nearby are reported, not
+  // applied. Empty vectors clear the forces.
+  ForceDelivery set_point_forces(const std::vector<Eigen::Vector3d>& points,
+                                 const std::vector<Eigen::Vector3d>& forces, double radius);
+  // Several sets of point forces at once (one per solid), replacing the previous ones.
+  ForceDelivery set_point_forces(
+      const std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>>&
+          point_forces,
+      double radius);
 
   // Sum of m u over fluid particles [kg m/s in 3D, kg m/s per m in 2D].
   Eigen::Vector3d total_fluid_momentum() const;

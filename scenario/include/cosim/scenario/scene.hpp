@@ -3,6 +3,7 @@
 // parser, registered by the caller, so every error is found before any process starts.
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -25,6 +26,18 @@ struct CouplingSettings {
   int chunk_values = 4096;                 // float64 values per message chunk
 };
 
+// The one world frame every participant works in (docs/architecture.md): right-handed, x along
+// the flow (along the bed of a sloping flume), y across it, z up (normal to the bed). A 2D flow
+// lives in the x-z plane and stands for a slice of `span` width along y. Gravity is declared once
+// for the scene; a sloping bed tilts it in the x-z plane: g (sin theta, 0, -cos theta).
+struct WorldSettings {
+  Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // [m/s^2]
+  double slope_degrees = 0.0;                // bed slope theta the gravity was tilted by
+};
+
+// Gravity of magnitude g tilted by a bed slope of theta degrees (flow down the slope along +x).
+Eigen::Vector3d slope_gravity(double slope_degrees, double g = 9.81);
+
 struct ParticipantEntry {
   std::string name;        // key in the scenario ("fluid_mps", "replay", ...)
   std::string executable;  // process to start
@@ -39,6 +52,7 @@ struct Scene {
   double duration = 0.0;
   double output_interval = 0.0;
   CouplingSettings coupling;
+  WorldSettings world;
   std::vector<ParticipantEntry> participants;  // flow provider first, then solids
   YAML::Node resolved;                         // every value used, defaults included
 

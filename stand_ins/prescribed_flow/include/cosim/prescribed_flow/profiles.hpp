@@ -26,7 +26,7 @@ struct ProfileSettings {
   double roughness_length = 0.0;
   // The bed: a point on it and its upward normal; z is the height above it along the normal.
   Eigen::Vector3d bed_point = Eigen::Vector3d::Zero();
-  Eigen::Vector3d bed_normal = Eigen::Vector3d::UnitY();
+  Eigen::Vector3d bed_normal = Eigen::Vector3d::UnitZ();  // world z is up
   // Flow depth h: points above it are in air (no velocity, water fraction 0).
   double depth = std::numeric_limits<double>::infinity();
   // Seed 004 capture phase: points less than capture_length upstream of the dam plane (through

@@ -22,6 +22,7 @@ struct Recording {
   int64_t run_id = 0;
   std::string participant;
   std::map<int64_t, RecordedWindow> windows;
+  std::string declaration;  // frame, dimension, span and gravity declared at the handshake
   bool finished = false;
   std::string metrics_json;
 };
