@@ -1,5 +1,7 @@
 // Unit tests of FluidSystem: coupling hooks, collision, restart, determinism, stability checks.
 #include <gtest/gtest.h>
+
+#include <limits>
 #include <omp.h>
 
 #include <algorithm>
@@ -107,6 +109,20 @@ TEST(MpsFluidSystem, ForcesWithNoFluidNearbyAreReported) {
       system.set_point_forces({{0.0, 0.0, 0.0}, {0.0, 0.1, 0.0}}, {{1, 0, 0}, {0, 2, 0}}, 0.02);
   EXPECT_EQ(delivery.undelivered_points, 1);
   EXPECT_EQ(delivery.undelivered_force, Eigen::Vector3d(0, 2, 0));
+}
+
+// The free surface over a point: the top of the still-water tank (0.1 m deep) within half a
+// particle, -inf beside the tank where there is no water.
+TEST(MpsFluidSystem, SampleSurfaceFindsTheWaterLevelAboveEachPoint) {
+  MpsParameters p = small_parameters();
+  const double l0 = p.particle_spacing;
+  FluidSystem system(p, still_water_tank(p, 0.2, 0.1, 0.2));
+  std::vector<double> surface;
+  system.sample_surface({{0.1, 0.02, 0.0}, {0.1, 0.5, 0.0}, {0.5, 0.0, 0.0}}, 2.0 * l0, surface);
+  ASSERT_EQ(surface.size(), 3u);
+  EXPECT_NEAR(surface[0], 0.1, 0.5 * l0);
+  EXPECT_NEAR(surface[1], 0.1, 0.5 * l0) << "a point above the water sees the same surface";
+  EXPECT_EQ(surface[2], -std::numeric_limits<double>::infinity()) << "no water in that column";
 }
 
 TEST(MpsFluidSystem, SampleVelocityAveragesFluidAndGivesWaterFraction) {
