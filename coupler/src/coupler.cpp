@@ -155,6 +155,7 @@ void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, do
     report.windows += 1;
     report.steps += status.steps;
     report.compute_seconds = status.compute_seconds;
+    report.cpu_seconds = status.cpu_seconds;
     report.wait_seconds = status.wait_seconds;
     if (status.stable_dt > 0.0) {
       next_stable_dt_ =
@@ -177,6 +178,7 @@ void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
     auto& report = reports_[status.header.sender];
     report.metrics_json = status.message;
     report.compute_seconds = status.compute_seconds;
+    report.cpu_seconds = status.cpu_seconds;
     report.wait_seconds = status.wait_seconds;
   };
   collect(processes, collection);

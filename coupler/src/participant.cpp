@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <ctime>
+
 namespace cosim::coupler {
 
 namespace {
@@ -33,6 +35,12 @@ Participant::~Participant() {
   if (heartbeat_.joinable()) heartbeat_.join();
 }
 
+double Participant::cpu_seconds() const {
+  timespec now{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
+
 double Participant::compute_seconds() const {
   return seconds_since(started_) - wait_seconds_;
 }
@@ -47,6 +55,7 @@ void Participant::publish_state(int8_t state, int steps, double stable_dt,
   status.state = state;
   status.steps = steps;
   status.compute_seconds = compute_seconds();
+  status.cpu_seconds = cpu_seconds();
   status.wait_seconds = wait_seconds_;
   status.stable_dt = stable_dt;
   status.message = message;
@@ -64,6 +73,7 @@ void Participant::heartbeat_loop() {
     status.state = cosim_msgs::status_t::STATE_BUSY;
     status.steps = 0;
     status.compute_seconds = 0.0;
+    status.cpu_seconds = 0.0;
     status.wait_seconds = 0.0;
     status.stable_dt = 0.0;
     try {

@@ -8,6 +8,7 @@
 
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/coupler/solver_loop.hpp"
 #include "cosim/fluid_mps/observers.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 #include "cosim/output/point_series.hpp"
@@ -91,134 +92,153 @@ mps::MpsState state_from_frame(const mps::RestartSettings& restart,
   return state;
 }
 
-}  // namespace
+// The MPS library as a participant: the window is the fluid step (split when it exceeds the
+// stable step), the solids' reaction comes from the link, samples go back through it.
+class FluidProcess final : public coupler::Solver {
+ public:
+  explicit FluidProcess(coupler::ProcessContext& context)
+      : config_(parse(context)),
+        system_(make_system(config_)),
+        link_(*context.participant, context.scene, config_.frame),
+        writer_(context.output_dir() / "particles", "fluid_mps"),
+        output_dir_(context.output_dir()) {
+    const auto& scene = config_.scene;
+    if (scene.kind == "open_channel" || scene.kind == "pool_fishway") {
+      open_boundaries_ = std::make_unique<mps::OpenBoundaries>(*system_, scene.inflow);
+    }
+    if (config_.reference && config_.reference->kind == "weirs") {
+      const bool periodic = scene.kind == "periodic_pool";
+      fishway_.emplace(scene.weirs, config_.parameters.particle_spacing,
+                       config_.reference->average_from,
+                       periodic ? scene.fill_discharge : scene.inflow.discharge, periodic);
+    } else if (config_.reference) {
+      reference_.emplace(*config_.reference, -config_.parameters.gravity.y());
+    }
+    if (config_.observation) {
+      observation_.emplace(config_.observation->points, config_.observation->radius);
+    }
+    spdlog::info("{} particles, l0 = {} m, stable dt {:.3g} s", system_->particle_count(),
+                 config_.parameters.particle_spacing, system_->stable_dt());
+  }
 
-int main(int argc, char** argv) {
-  return coupler::run_process(argc, argv, "fluid_mps", [](coupler::ProcessContext& context) {
+  double output_interval() const { return config_.output_interval; }
+  double output_time() const override { return system_->time(); }
+  void write_output() override { writer_.write_frame(make_frame(*system_, config_.frame)); }
+
+  coupler::WindowResult initial_window(const coupler::Window& window) override {
+    return advance(window);
+  }
+
+  coupler::WindowResult advance(const coupler::Window& window) override {
+    const auto solids = link_.receive_solids(window);
+    int window_steps = 0;
+    if (window.dt > 0.0) window_steps = step_window(window, solids);
+    if (observation_) observation_->record(*system_);
+    if (reference_)
+      reference_->observe(*system_, impulses_, observation_ ? &*observation_ : nullptr);
+    if (fishway_) fishway_->observe(*system_, open_boundaries_.get());
+    for (const auto& solid : solids) {
+      const auto velocity =
+          system_->sample_velocity(solid.positions, config_.sample_radius, &water_);
+      system_->sample_surface(solid.positions, config_.sample_radius, surface_);
+      link_.publish_samples(solid.name, velocity, water_, surface_);
+    }
+    return {window_steps, system_->stable_dt()};
+  }
+
+  void finish(coupler::MetricsReport& report) override {
+    if (reference_) reference_->report(report);
+    if (fishway_) fishway_->report(report);
+    if (observation_) observation_->write_csv((output_dir_ / "observation_points.csv").string());
+    auto& info = report.info();
+    if (open_boundaries_) {
+      info["inflow_volume"] = open_boundaries_->inflow_volume();
+      info["recycled_particles"] = open_boundaries_->recycled_total();
+      info["final_inflow_velocity"] = open_boundaries_->velocity();
+      info["final_measured_level"] = open_boundaries_->measured_level();
+    }
+    info["particles"] = system_->particle_count();
+    info["steps"] = steps_;
+    info["mean_pcg_iterations"] = steps_ > 0 ? double(pcg_iterations_) / steps_ : 0.0;
+    info["most_pcg_iterations"] = most_pcg_iterations_;
+    // World impulses [N s]: handed over by the link, actually received by the fluid particles,
+    // not deliverable (no fluid near a solid point; out of a 2D plane).
+    auto json = [](const Eigen::Vector3d& v) {
+      return nlohmann::json::array({v.x(), v.y(), v.z()});
+    };
+    info["booked_solid_reaction_impulse"] = json(link_.booked_impulse());
+    info["solid_reaction_impulse"] = json(config_.frame.force_to_world(impulses_.solids));
+    info["undelivered_solid_force_impulse"] = json(config_.frame.force_to_world(undelivered_));
+    info["out_of_plane_solid_force_impulse"] = json(link_.out_of_plane_impulse());
+  }
+
+ private:
+  static mps::FluidConfig parse(coupler::ProcessContext& context) {
     auto section = context.section();
     mps::FluidConfig config = mps::parse_config(section, context.scene);
     context.declare_frame(config.parameters.dimension, config.span,
                           config.frame.to_world(config.parameters.gravity));
+    return config;
+  }
+
+  static std::unique_ptr<mps::FluidSystem> make_system(mps::FluidConfig& config) {
     mps::ParticleSet particles = build_scene(config.parameters, config.scene);
-    std::unique_ptr<mps::FluidSystem> system;
-    std::unique_ptr<mps::OpenBoundaries> open_boundaries;
-    if (config.restart) {
-      system = std::make_unique<mps::FluidSystem>(config.parameters,
-                                                  state_from_frame(*config.restart, config.frame));
-      spdlog::info("restarted from {} frame {} at t = {:.6g} s", config.restart->file.string(),
-                   config.restart->frame, system->time());
-    } else {
-      system = std::make_unique<mps::FluidSystem>(config.parameters, std::move(particles));
+    if (!config.restart) {
+      return std::make_unique<mps::FluidSystem>(config.parameters, std::move(particles));
     }
-    if (config.scene.kind == "open_channel" || config.scene.kind == "pool_fishway") {
-      open_boundaries = std::make_unique<mps::OpenBoundaries>(*system, config.scene.inflow);
-    }
-    std::optional<mps::FishwayReport> fishway;
-    if (config.reference && config.reference->kind == "weirs") {
-      const bool periodic = config.scene.kind == "periodic_pool";
-      fishway.emplace(
-          config.scene.weirs, config.parameters.particle_spacing, config.reference->average_from,
-          periodic ? config.scene.fill_discharge : config.scene.inflow.discharge, periodic);
-    }
-    std::optional<mps::ObservationPoints> observation;
-    if (config.observation) {
-      observation.emplace(config.observation->points, config.observation->radius);
-    }
-    spdlog::info("{} particles, l0 = {} m, stable dt {:.3g} s", system->particle_count(),
-                 config.parameters.particle_spacing, system->stable_dt());
+    auto system = std::make_unique<mps::FluidSystem>(
+        config.parameters, state_from_frame(*config.restart, config.frame));
+    spdlog::info("restarted from {} frame {} at t = {:.6g} s", config.restart->file.string(),
+                 config.restart->frame, system->time());
+    return system;
+  }
 
-    auto& participant = *context.participant;
-    coupler::FlowLink link(participant, context.scene, config.frame);
-    output::PointSeriesWriter writer(context.output_dir() / "particles", "fluid_mps");
-    std::optional<mps::ReferenceTracker> reference;
-    if (config.reference && !fishway) {
-      reference.emplace(*config.reference, -config.parameters.gravity.y());
+  // The solids' reaction (minus their drag, in the fluid's plane, per span width, rescaled to
+  // this window by the link) acts in every fluid step of the window.
+  int step_window(const coupler::Window& window, const std::vector<coupler::SolidForcing>& solids) {
+    std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> forces;
+    for (const auto& solid : solids) forces.emplace_back(solid.positions, solid.reaction);
+    const auto delivery = system_->set_point_forces(forces, config_.sample_radius);
+    undelivered_ += delivery.undelivered_force * window.dt;
+    const int pieces =
+        std::max(1, static_cast<int>(std::ceil(window.dt / system_->stable_dt() - 1e-9)));
+    for (int piece = 0; piece < pieces; ++piece) {
+      const auto step = system_->step(window.dt / pieces);
+      impulses_.solids += step.external_impulse;
+      impulses_.wall_viscous += step.wall_viscous_force * (window.dt / pieces);
+      impulses_.wall_collision += step.wall_collision_impulse;
+      impulses_.wall_pressure += step.wall_pressure_impulse;
+      impulses_.fluid_pressure += step.pressure_impulse - step.wall_pressure_impulse;
+      if (open_boundaries_) open_boundaries_->update();
+      pcg_iterations_ += step.pcg_iterations;
+      most_pcg_iterations_ = std::max(most_pcg_iterations_, step.pcg_iterations);
     }
+    system_->set_point_forces({}, config_.sample_radius);
+    steps_ += pieces;
+    return pieces;
+  }
 
-    double next_output = system->time();
-    int64_t steps = 0, pcg_iterations = 0;
-    int most_pcg_iterations = 0;
-    Eigen::Vector3d undelivered = Eigen::Vector3d::Zero();
-    mps::FluidImpulses impulses;  // momentum the fluid received, by source
-    std::vector<double> water, surface;
-    while (true) {
-      const coupler::Window window = participant.next_window();
-      context.maybe_inject_fault(window.index);
-      if (window.finish) {
-        if (system->time() > next_output - config.output_interval * 0.5)
-          writer.write_frame(make_frame(*system, config.frame));
-        coupler::MetricsReport report;
-        if (reference) reference->report(report);
-        if (fishway) fishway->report(report);
-        if (observation)
-          observation->write_csv((context.output_dir() / "observation_points.csv").string());
-        if (open_boundaries) {
-          report.info()["inflow_volume"] = open_boundaries->inflow_volume();
-          report.info()["recycled_particles"] = open_boundaries->recycled_total();
-          report.info()["final_inflow_velocity"] = open_boundaries->velocity();
-          report.info()["final_measured_level"] = open_boundaries->measured_level();
-        }
-        report.info()["particles"] = system->particle_count();
-        report.info()["steps"] = steps;
-        report.info()["mean_pcg_iterations"] = steps > 0 ? double(pcg_iterations) / steps : 0.0;
-        report.info()["most_pcg_iterations"] = most_pcg_iterations;
-        // World impulses [N s]: handed over by the link, actually received by the fluid
-        // particles, not deliverable (no fluid near a solid point; out of a 2D plane).
-        auto world_impulse = [&](const Eigen::Vector3d& solver_impulse) {
-          const Eigen::Vector3d w = config.frame.force_to_world(solver_impulse);
-          return nlohmann::json::array({w.x(), w.y(), w.z()});
-        };
-        const auto& booked = link.booked_impulse();
-        const auto& out_of_plane = link.out_of_plane_impulse();
-        report.info()["booked_solid_reaction_impulse"] = {booked.x(), booked.y(), booked.z()};
-        report.info()["solid_reaction_impulse"] = world_impulse(impulses.solids);
-        report.info()["undelivered_solid_force_impulse"] = world_impulse(undelivered);
-        report.info()["out_of_plane_solid_force_impulse"] = {out_of_plane.x(), out_of_plane.y(),
-                                                             out_of_plane.z()};
-        participant.finished(report.dump());
-        return;
-      }
-      auto solids = link.receive_solids(window);
-      int window_steps = 0;
-      if (window.dt > 0.0) {
-        // The link hands over minus the solids' drag of the previous window, in the fluid's
-        // plane and per span width, rescaled to this window; it acts in every step of it.
-        std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> forces;
-        for (const auto& solid : solids) forces.emplace_back(solid.positions, solid.reaction);
-        const auto delivery = system->set_point_forces(forces, config.sample_radius);
-        undelivered += delivery.undelivered_force * window.dt;
-        // The window is the fluid step; a window beyond the stable step is split.
-        const int pieces =
-            std::max(1, static_cast<int>(std::ceil(window.dt / system->stable_dt() - 1e-9)));
-        for (int piece = 0; piece < pieces; ++piece) {
-          const auto step = system->step(window.dt / pieces);
-          impulses.solids += step.external_impulse;
-          impulses.wall_viscous += step.wall_viscous_force * (window.dt / pieces);
-          impulses.wall_collision += step.wall_collision_impulse;
-          impulses.wall_pressure += step.wall_pressure_impulse;
-          impulses.fluid_pressure += step.pressure_impulse - step.wall_pressure_impulse;
-          if (open_boundaries) open_boundaries->update();
-          pcg_iterations += step.pcg_iterations;
-          most_pcg_iterations = std::max(most_pcg_iterations, step.pcg_iterations);
-          ++window_steps;
-        }
-        steps += window_steps;
-        system->set_point_forces({}, config.sample_radius);
-      }
-      if (observation) observation->record(*system);
-      if (reference) reference->observe(*system, impulses, observation ? &*observation : nullptr);
-      if (fishway) fishway->observe(*system, open_boundaries.get());
-      for (const auto& solid : solids) {
-        const auto velocity =
-            system->sample_velocity(solid.positions, config.sample_radius, &water);
-        system->sample_surface(solid.positions, config.sample_radius, surface);
-        link.publish_samples(solid.name, velocity, water, surface);
-      }
-      if (system->time() >= next_output - 1e-9 * config.output_interval) {
-        writer.write_frame(make_frame(*system, config.frame));
-        next_output += config.output_interval;
-      }
-      participant.done(window_steps, system->stable_dt());
-    }
+  mps::FluidConfig config_;
+  std::unique_ptr<mps::FluidSystem> system_;
+  coupler::FlowLink link_;
+  output::PointSeriesWriter writer_;
+  std::filesystem::path output_dir_;
+  std::unique_ptr<mps::OpenBoundaries> open_boundaries_;
+  std::optional<mps::FishwayReport> fishway_;
+  std::optional<mps::ObservationPoints> observation_;
+  std::optional<mps::ReferenceTracker> reference_;
+  int64_t steps_ = 0, pcg_iterations_ = 0;
+  int most_pcg_iterations_ = 0;
+  Eigen::Vector3d undelivered_ = Eigen::Vector3d::Zero();
+  mps::FluidImpulses impulses_;  // momentum the fluid received, by source
+  std::vector<double> water_, surface_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return coupler::run_process(argc, argv, "fluid_mps", [](coupler::ProcessContext& context) {
+    FluidProcess fluid(context);
+    coupler::run_solver_loop(context, fluid, fluid.output_interval());
   });
 }

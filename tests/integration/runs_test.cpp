@@ -44,8 +44,7 @@ TEST(Runs, BladeRunWritesEveryOutputOfARunFolder) {
   const auto& beam = summary["participants"][1];
   EXPECT_EQ(beam["name"], "vegetation_beam");
   EXPECT_GT(beam["steps"].get<int64_t>(), 20) << "the beam sub-cycles inside each window";
-  const double tip =
-      beam["report"]["metrics"]["tip_streamwise_displacement"]["value"].get<double>();
+  const double tip = beam["report"]["metrics"]["tip_streamwise_position"]["value"].get<double>();
   EXPECT_GT(tip, 0.0) << "the stream bends the blade downstream";
   // Every default is written into the resolved scenario.
   const auto resolved = scenario::load_yaml_file(run_dir / "scenario.yaml");
@@ -211,7 +210,7 @@ TEST(Runs, ReplayIntoAnotherWorldIsRefusedAtTheHandshake) {
   EXPECT_NE(replayed.exit_code, 0) << replayed.output;
   EXPECT_NE(replayed.output.find("participants disagree on the world"), std::string::npos)
       << replayed.output;
-  EXPECT_NE(replayed.output.find("'vegetation_beam' declares gravity (0.855"), std::string::npos)
+  EXPECT_NE(replayed.output.find("'vegetation_beam' declares gravity (0.854998"), std::string::npos)
       << replayed.output;
   EXPECT_NE(replayed.output.find("'prescribed_flow' declares (0, 0, -9.81)"), std::string::npos)
       << replayed.output;
@@ -243,7 +242,7 @@ TEST(Runs, SweepTabulatesEveryMetricPerValue) {
   int rows = 0, tip_rows = 0;
   while (std::getline(in, line)) {
     ++rows;
-    tip_rows += line.find("vegetation_beam.tip_streamwise_displacement") != std::string::npos;
+    tip_rows += line.find("vegetation_beam.tip_streamwise_position") != std::string::npos;
   }
   EXPECT_EQ(tip_rows, 2) << "one row per value";
   EXPECT_EQ(rows, 4) << "two metrics of the beam for each of two values";

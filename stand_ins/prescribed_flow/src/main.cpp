@@ -4,37 +4,59 @@
 
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/coupler/solver_loop.hpp"
 #include "cosim/prescribed_flow/config.hpp"
 
-int main(int argc, char** argv) {
-  using namespace cosim;
-  return coupler::run_process(argc, argv, "prescribed_flow", [](coupler::ProcessContext& context) {
-    auto section = context.section();
-    const prescribed_flow::PrescribedFlow flow(prescribed_flow::parse_settings(section));
-    auto& participant = *context.participant;
-    coupler::FlowLink link(participant, context.scene);
-    // The flow cannot move, but it books the impulse the solids took from it by the link's rule
-    // (for momentum checks: minus the impulse a real fluid would have received).
-    Eigen::Vector3d impulse_on_solids = Eigen::Vector3d::Zero();
-    std::vector<Eigen::Vector3d> velocity;
-    std::vector<double> water;
-    while (true) {
-      const coupler::Window window = participant.next_window();
-      context.maybe_inject_fault(window.index);
-      if (window.finish) {
-        nlohmann::json metrics;
-        metrics["profile"] = prescribed_flow::profile_kind_name(flow.settings().kind);
-        metrics["impulse_on_solids"] = {impulse_on_solids.x(), impulse_on_solids.y(),
-                                        impulse_on_solids.z()};
-        participant.finished(metrics.dump());
-        return;
-      }
-      for (const auto& solid : link.receive_solids(window)) {
-        for (const auto& reaction : solid.reaction) impulse_on_solids -= reaction * window.dt;
-        flow.sample(window.end_time(), solid.positions, velocity, water);
-        link.publish_samples(solid.name, velocity, water);
-      }
-      participant.done(1);
+namespace {
+
+using namespace cosim;
+
+class PrescribedFlowProcess final : public coupler::Solver {
+ public:
+  explicit PrescribedFlowProcess(coupler::ProcessContext& context)
+      : flow_(settings_of(context)), link_(*context.participant, context.scene) {}
+
+  coupler::WindowResult initial_window(const coupler::Window& window) override {
+    return advance(window);
+  }
+  coupler::WindowResult advance(const coupler::Window& window) override {
+    for (const auto& solid : link_.receive_solids(window)) {
+      // The flow cannot move, but it books the impulse the solids took from it by the link's
+      // rule (for momentum checks: minus the impulse a real fluid would have received).
+      for (const auto& reaction : solid.reaction) impulse_on_solids_ -= reaction * window.dt;
+      flow_.sample(window.end_time(), solid.positions, velocity_, water_);
+      link_.publish_samples(solid.name, velocity_, water_);
     }
-  });
+    time_ = window.end_time();
+    return {1, 0.0};
+  }
+  double output_time() const override { return time_; }
+  void finish(coupler::MetricsReport& report) override {
+    report.info()["profile"] = prescribed_flow::profile_kind_name(flow_.settings().kind);
+    report.info()["impulse_on_solids"] = {impulse_on_solids_.x(), impulse_on_solids_.y(),
+                                          impulse_on_solids_.z()};
+  }
+
+ private:
+  static prescribed_flow::ProfileSettings settings_of(coupler::ProcessContext& context) {
+    scenario::Section section = context.section();
+    return prescribed_flow::parse_settings(section);
+  }
+
+  const prescribed_flow::PrescribedFlow flow_;
+  coupler::FlowLink link_;
+  Eigen::Vector3d impulse_on_solids_ = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> velocity_;
+  std::vector<double> water_;
+  double time_ = 0.0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return cosim::coupler::run_process(argc, argv, "prescribed_flow",
+                                     [](cosim::coupler::ProcessContext& context) {
+                                       PrescribedFlowProcess flow(context);
+                                       cosim::coupler::run_solver_loop(context, flow, 0.0);
+                                     });
 }

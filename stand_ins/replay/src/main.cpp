@@ -3,37 +3,62 @@
 #include <spdlog/spdlog.h>
 
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/coupler/solver_loop.hpp"
 #include "cosim/replay/config.hpp"
 #include "cosim/replay/recording.hpp"
 
-int main(int argc, char** argv) {
-  using namespace cosim;
-  return coupler::run_process(argc, argv, "replay", [](coupler::ProcessContext& context) {
-    auto section = context.section();
-    const replay::ReplaySettings settings = replay::parse_settings(section);
-    const replay::Recording recording =
-        replay::read_recording(settings.event_log, settings.participant);
-    spdlog::info("replaying '{}' from {} ({} windows recorded)", settings.participant,
-                 settings.event_log.string(), recording.windows.size());
-    auto& participant = *context.participant;
+namespace {
+
+using namespace cosim;
+
+class ReplayProcess final : public coupler::Solver {
+ public:
+  explicit ReplayProcess(coupler::ProcessContext& context)
+      : settings_(settings_of(context)),
+        recording_(replay::read_recording(settings_.event_log, settings_.participant)),
+        participant_(*context.participant) {
+    spdlog::info("replaying '{}' from {} ({} windows recorded)", settings_.participant,
+                 settings_.event_log.string(), recording_.windows.size());
     // It stands in for the recorded participant, so it declares that one's frame.
-    participant.declare(recording.declaration);
-    while (true) {
-      const coupler::Window window = participant.next_window();
-      context.maybe_inject_fault(window.index);
-      if (window.finish) {
-        participant.finished(recording.metrics_json.empty() ? "{}" : recording.metrics_json);
-        return;
-      }
-      const auto recorded = recording.windows.find(window.index);
-      if (recorded == recording.windows.end() || !recorded->second.done) {
-        throw std::runtime_error(fmt::format("{}: window {} of '{}' is not in the recording",
-                                             settings.event_log.string(), window.index,
-                                             settings.participant));
-      }
-      for (const auto& [field, values] : recorded->second.fields)
-        participant.publish(field, values);
-      participant.done(recorded->second.steps, recorded->second.stable_dt);
+    participant_.declare(recording_.declaration);
+  }
+
+  coupler::WindowResult initial_window(const coupler::Window& window) override {
+    return advance(window);
+  }
+  coupler::WindowResult advance(const coupler::Window& window) override {
+    const auto recorded = recording_.windows.find(window.index);
+    if (recorded == recording_.windows.end() || !recorded->second.done) {
+      throw std::runtime_error(fmt::format("{}: window {} of '{}' is not in the recording",
+                                           settings_.event_log.string(), window.index,
+                                           settings_.participant));
     }
+    for (const auto& [field, values] : recorded->second.fields) participant_.publish(field, values);
+    time_ = window.end_time();
+    return {recorded->second.steps, recorded->second.stable_dt};
+  }
+  double output_time() const override { return time_; }
+  void finish(coupler::MetricsReport& report) override {
+    if (!recording_.metrics_json.empty()) report.merge(recording_.metrics_json);
+  }
+
+ private:
+  static replay::ReplaySettings settings_of(coupler::ProcessContext& context) {
+    scenario::Section section = context.section();
+    return replay::parse_settings(section);
+  }
+
+  replay::ReplaySettings settings_;
+  replay::Recording recording_;
+  coupler::Participant& participant_;
+  double time_ = 0.0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return coupler::run_process(argc, argv, "replay", [](coupler::ProcessContext& context) {
+    ReplayProcess replayed(context);
+    coupler::run_solver_loop(context, replayed, 0.0);
   });
 }

@@ -26,7 +26,8 @@ struct CouplerOptions {
 
 struct ParticipantReport {
   std::string name;
-  double compute_seconds = 0.0;
+  double compute_seconds = 0.0;  // wall time outside waiting for partners
+  double cpu_seconds = 0.0;      // CPU time of the process, all threads
   double wait_seconds = 0.0;
   int64_t windows = 0;
   int64_t steps = 0;         // solver steps (sub-steps for sub-cycling solids), summed over windows

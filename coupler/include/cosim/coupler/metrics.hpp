@@ -34,6 +34,10 @@ class MetricsReport {
   // Anything else worth keeping (stability flags, counts, series names).
   nlohmann::json& info() { return json_["info"]; }
   std::string dump() const { return json_.dump(); }
+  // Takes over a report recorded earlier (a JSON object text), e.g. a replayed participant's.
+  void merge(const std::string& report_json) {
+    json_.merge_patch(nlohmann::json::parse(report_json));
+  }
 
  private:
   nlohmann::json json_ = nlohmann::json::object();

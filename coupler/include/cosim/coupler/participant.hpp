@@ -74,6 +74,8 @@ class Participant {
   // Time accounting: compute time is everything outside waiting for partners.
   double wait_seconds() const { return wait_seconds_; }
   double compute_seconds() const;
+  // CPU time of this process, every thread (OpenMP workers, heartbeat) included [s].
+  double cpu_seconds() const;
   int64_t total_steps() const { return total_steps_; }
   Bus& bus() { return *bus_; }
 
