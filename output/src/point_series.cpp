@@ -4,7 +4,11 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <set>
 #include <stdexcept>
 #include <utility>
 
@@ -105,8 +109,10 @@ struct Checker {
     return id(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose, object, "opening group");
   }
 
+  // Writes a dataset with its `unit`, `description` and (when given) `legend` attributes.
   void write(hid_t loc, const std::string& name, const std::string& object, hid_t file_type,
-             hid_t mem_type, const std::vector<hsize_t>& dims, const void* data) const {
+             hid_t mem_type, const std::vector<hsize_t>& dims, const void* data,
+             const FieldInfo& info) const {
     Handle space = id(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
                       H5Sclose, object, "creating dataspace for");
     Handle dset = id(H5Dcreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
@@ -119,6 +125,96 @@ struct Checker {
       ok(H5Dwrite(dset.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), object,
          "writing dataset");
     }
+    annotate(dset.get(), object, info);
+  }
+
+  void annotate(hid_t dataset, const std::string& object, const FieldInfo& info) const {
+    write_string(dataset, "unit", info.unit, object);
+    write_string(dataset, "description", info.description, object);
+    if (!info.legend.empty()) write_string(dataset, "legend", info.legend, object);
+  }
+
+  // A variable-length UTF-8 string attribute (what h5py and HDFView show as text).
+  void write_string(hid_t loc, const std::string& name, const std::string& value,
+                    const std::string& object) const {
+    const std::string target = object + "@" + name;
+    Handle type = id(H5Tcopy(H5T_C_S1), H5Tclose, target, "creating string type for");
+    ok(H5Tset_size(type.get(), H5T_VARIABLE), target, "sizing string type for");
+    ok(H5Tset_cset(type.get(), H5T_CSET_UTF8), target, "setting character set of");
+    Handle space = id(H5Screate(H5S_SCALAR), H5Sclose, target, "creating dataspace for");
+    if (H5Aexists(loc, name.c_str()) > 0) {
+      ok(H5Adelete(loc, name.c_str()), target, "replacing attribute");
+    }
+    Handle attr =
+        id(H5Acreate2(loc, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+           H5Aclose, target, "creating attribute");
+    const char* text = value.c_str();
+    ok(H5Awrite(attr.get(), type.get(), &text), target, "writing attribute");
+  }
+
+  // A string attribute (variable or fixed length), or "" when there is none.
+  std::string read_string(hid_t loc, const std::string& name, const std::string& object) const {
+    const std::string target = object + "@" + name;
+    const htri_t present = H5Aexists(loc, name.c_str());
+    if (present < 0) fail(file, target, "checking for");
+    if (present == 0) return "";
+    Handle attr =
+        id(H5Aopen(loc, name.c_str(), H5P_DEFAULT), H5Aclose, target, "opening attribute");
+    Handle stored = id(H5Aget_type(attr.get()), H5Tclose, target, "getting type of");
+    if (H5Tget_class(stored.get()) != H5T_STRING) return "";
+    Handle type = id(H5Tcopy(H5T_C_S1), H5Tclose, target, "creating string type for");
+    // HDF5 converts no character set into another: read in the stored one.
+    ok(H5Tset_cset(type.get(), H5Tget_cset(stored.get())), target, "setting character set of");
+    if (H5Tis_variable_str(stored.get()) > 0) {
+      ok(H5Tset_size(type.get(), H5T_VARIABLE), target, "sizing string type for");
+      char* text = nullptr;
+      ok(H5Aread(attr.get(), type.get(), &text), target, "reading attribute");
+      std::string value = text != nullptr ? text : "";
+      H5free_memory(text);
+      return value;
+    }
+    const std::size_t size = H5Tget_size(stored.get());
+    ok(H5Tset_size(type.get(), size + 1), target, "sizing string type for");
+    std::string value(size + 1, '\0');
+    ok(H5Aread(attr.get(), type.get(), value.data()), target, "reading attribute");
+    value.resize(value.find('\0'));
+    return value;
+  }
+
+  // Appends one value to a 1D chunked dataset that grows without bound, creating it first.
+  void append(hid_t loc, const std::string& name, const std::string& object, double value,
+              const FieldInfo& info) const {
+    if (!exists(loc, name, object)) {
+      const hsize_t dims[1] = {0};
+      const hsize_t max_dims[1] = {H5S_UNLIMITED};
+      const hsize_t chunk[1] = {256};
+      Handle space =
+          id(H5Screate_simple(1, dims, max_dims), H5Sclose, object, "creating dataspace for");
+      Handle plist = id(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, object, "creating plist for");
+      ok(H5Pset_chunk(plist.get(), 1, chunk), object, "chunking");
+      Handle created = id(H5Dcreate2(loc, name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
+                                     plist.get(), H5P_DEFAULT),
+                          H5Dclose, object, "creating dataset");
+      annotate(created.get(), object, info);
+    }
+    Handle dset = id(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose, object, "opening dataset");
+    hsize_t size = 0;
+    {
+      Handle space = id(H5Dget_space(dset.get()), H5Sclose, object, "getting dataspace of");
+      if (H5Sget_simple_extent_dims(space.get(), &size, nullptr) != 1) {
+        fail(file, object, "getting size of");
+      }
+    }
+    const hsize_t grown = size + 1;
+    ok(H5Dset_extent(dset.get(), &grown), object, "extending dataset");
+    Handle space = id(H5Dget_space(dset.get()), H5Sclose, object, "getting dataspace of");
+    const hsize_t count = 1;
+    ok(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, &size, nullptr, &count, nullptr), object,
+       "selecting the end of");
+    Handle memory =
+        id(H5Screate_simple(1, &count, nullptr), H5Sclose, object, "creating dataspace for");
+    ok(H5Dwrite(dset.get(), H5T_NATIVE_DOUBLE, memory.get(), space.get(), H5P_DEFAULT, &value),
+       object, "appending to dataset");
   }
 
   // Reads a dataset of `rank` dimensions whose second dimension (if any) must equal `cols`.
@@ -244,6 +340,17 @@ int frames_in(const Checker& c, hid_t file) {
   return static_cast<int>(info.nlinks);
 }
 
+// What the writer's own datasets mean; fields fall back to a description naming them.
+FieldInfo completed(FieldInfo info, const std::string& default_unit,
+                    const std::string& default_description) {
+  if (info.unit.empty()) info.unit = default_unit;
+  if (info.description.empty()) info.description = default_description;
+  return info;
+}
+
+constexpr const char* kUnspecified = "unspecified";
+constexpr const char* kFramePrefix = "frame_";
+
 }  // namespace
 
 struct PointSeriesWriter::Impl {
@@ -252,12 +359,90 @@ struct PointSeriesWriter::Impl {
   std::string title;
   Handle file;
   std::vector<detail::FrameIndex> frames;
+  std::map<std::string, FieldInfo> fields;            // from describe()
+  std::set<std::size_t> polyvertex_sizes;             // /topology/polyvertex_<n> written
+  std::map<std::string, detail::SeriesIndex> series;  // written by callers, for the XDMF
 
   Checker checker() const { return Checker{h5}; }
   void write_xdmf() const {
-    detail::write_file_atomically(xmf, detail::render_xdmf(title, h5.filename().string(), frames));
+    std::vector<detail::SeriesIndex> sampled;
+    sampled.reserve(series.size());
+    for (const auto& [name, s] : series) sampled.push_back(s);
+    detail::write_file_atomically(
+        xmf, detail::render_xdmf(title, h5.filename().string(), frames, sampled));
   }
   void flush() const { checker().ok(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "/", "flushing"); }
+
+  FieldInfo field_info(const std::string& name, const std::string& kind,
+                       const std::string& default_unit) const {
+    const auto found = fields.find(name);
+    return completed(found != fields.end() ? found->second : FieldInfo{}, default_unit,
+                     kind + " '" + name + "'");
+  }
+
+  // The vertex cells 0..n-1 that the XDMF Polyvertex topology of an n-point frame refers to:
+  // the Xdmf3 readers make no cells from a Polyvertex topology without explicit connectivity.
+  std::string polyvertex(std::size_t n) {
+    const std::string name = "polyvertex_" + std::to_string(n);
+    const std::string object = "/topology/" + name;
+    if (polyvertex_sizes.insert(n).second) {
+      const Checker c = checker();
+      Handle topology = c.open_group(file.get(), "/topology", "/topology");
+      std::vector<int> cells(n);
+      for (std::size_t i = 0; i < n; ++i) cells[i] = static_cast<int>(i);
+      c.write(topology.get(), name, object, H5T_STD_I32LE, H5T_NATIVE_INT,
+              {static_cast<hsize_t>(n)}, cells.data(),
+              {"1",
+               "vertex cells 0.." + std::to_string(n) + "-1 of every frame with " +
+                   std::to_string(n) + " points (XDMF Polyvertex connectivity)",
+               ""});
+    }
+    return object;
+  }
+
+  // One sample of an automatic frame series: appended on disk, kept for the XDMF.
+  void append_frame_series(detail::FrameIndex& index, const std::string& name, double value,
+                           const FieldInfo& info) {
+    const Checker c = checker();
+    const std::string g = "/series/" + name;
+    Handle all = c.open_group(file.get(), "/series", "/series");
+    Handle group = c.exists(all.get(), name, g) ? c.open_group(all.get(), name, g)
+                                                : c.create_group(all.get(), name, g);
+    c.append(group.get(), "time", g + "/time", index.time,
+             {"s", "simulated time of the frame", ""});
+    c.append(group.get(), "values", g + "/values", value, info);
+    index.grid_values.emplace_back(name, value);
+  }
+
+  void append_frame_statistics(detail::FrameIndex& index, const PointFrame& frame) {
+    append_frame_series(index, "frame_points", static_cast<double>(frame.positions.size()),
+                        {"1", "number of points in the frame", ""});
+    if (frame.positions.empty()) return;
+    for (const auto& [name, values] : frame.scalars) {
+      const FieldInfo field = field_info(name, "scalar field", kUnspecified);
+      double sum = 0.0;
+      for (double v : values) sum += v;
+      const auto [low, high] = std::minmax_element(values.begin(), values.end());
+      const std::string prefix = kFramePrefix + name;
+      append_frame_series(
+          index, prefix + "_min", *low,
+          {field.unit, "smallest over the frame's points of: " + field.description, ""});
+      append_frame_series(
+          index, prefix + "_max", *high,
+          {field.unit, "largest over the frame's points of: " + field.description, ""});
+      append_frame_series(
+          index, prefix + "_mean", sum / static_cast<double>(values.size()),
+          {field.unit, "mean over the frame's points of: " + field.description, ""});
+    }
+    for (const auto& [name, values] : frame.vectors) {
+      const FieldInfo field = field_info(name, "vector field", kUnspecified);
+      double largest = 0.0;
+      for (const auto& v : values) largest = std::max(largest, v.norm());
+      append_frame_series(
+          index, kFramePrefix + name + "_max_magnitude", largest,
+          {field.unit, "largest magnitude over the frame's points of: " + field.description, ""});
+    }
+  }
 };
 
 PointSeriesWriter::PointSeriesWriter(const std::filesystem::path& stem, std::string title)
@@ -274,7 +459,9 @@ PointSeriesWriter::PointSeriesWriter(const std::filesystem::path& stem, std::str
   Handle fapl = access_list(c);
   impl_->file = c.id(H5Fcreate(impl_->h5.string().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
                      H5Fclose, "/", "creating HDF5 file");
+  c.write_string(impl_->file.get(), "title", impl_->title, "/");
   c.create_group(impl_->file.get(), "/frames", "/frames");
+  c.create_group(impl_->file.get(), "/topology", "/topology");
   c.create_group(impl_->file.get(), "/series", "/series");
   impl_->flush();
   // Replaces any index left by an earlier run that would now point at missing frames.
@@ -282,6 +469,11 @@ PointSeriesWriter::PointSeriesWriter(const std::filesystem::path& stem, std::str
 }
 
 PointSeriesWriter::~PointSeriesWriter() = default;
+
+void PointSeriesWriter::describe(const std::string& name, FieldInfo info) {
+  check_name(name, "field");
+  impl_->fields[name] = std::move(info);
+}
 
 void PointSeriesWriter::write_frame(const PointFrame& frame) {
   validate(frame);
@@ -294,6 +486,7 @@ void PointSeriesWriter::write_frame(const PointFrame& frame) {
   index.segments = frame.segments.size();
   const std::string& g = index.group;
   const hsize_t n = index.points;
+  if (n > 0) index.topology = impl_->polyvertex(index.points);
 
   try {
     Handle group = c.create_group(file, g, g);
@@ -303,33 +496,36 @@ void PointSeriesWriter::write_frame(const PointFrame& frame) {
           H5Acreate2(group.get(), "time", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT),
           H5Aclose, g + "@time", "creating attribute");
       c.ok(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &frame.time), g + "@time", "writing attribute");
+      c.write_string(group.get(), "time_unit", "s", g);
     }
     c.write(group.get(), "positions", g + "/positions", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {n, 3},
-            flatten(frame.positions).data());
+            flatten(frame.positions).data(), {"m", "point positions (x, y, z)", ""});
 
     Handle scalars = c.create_group(group.get(), "scalars", g + "/scalars");
     for (const auto& [name, values] : frame.scalars) {
       c.write(scalars.get(), name, g + "/scalars/" + name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {n},
-              values.data());
+              values.data(), impl_->field_info(name, "scalar field", kUnspecified));
       index.scalars.push_back(name);
     }
     Handle vectors = c.create_group(group.get(), "vectors", g + "/vectors");
     for (const auto& [name, values] : frame.vectors) {
       c.write(vectors.get(), name, g + "/vectors/" + name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
-              {n, 3}, flatten(values).data());
+              {n, 3}, flatten(values).data(),
+              impl_->field_info(name, "vector field", kUnspecified));
       index.vectors.push_back(name);
     }
     Handle labels = c.create_group(group.get(), "labels", g + "/labels");
     for (const auto& [name, values] : frame.labels) {
       c.write(labels.get(), name, g + "/labels/" + name, H5T_STD_I32LE, H5T_NATIVE_INT, {n},
-              values.data());
+              values.data(), impl_->field_info(name, "integer label", "1"));
       index.labels.push_back(name);
     }
     if (!frame.segments.empty()) {
       // std::array<int, 2> is two contiguous ints, so the vector is already an M x 2 block.
       static_assert(sizeof(std::array<int, 2>) == 2 * sizeof(int));
       c.write(group.get(), "segments", g + "/segments", H5T_STD_I32LE, H5T_NATIVE_INT,
-              {static_cast<hsize_t>(frame.segments.size()), 2}, frame.segments.data());
+              {static_cast<hsize_t>(frame.segments.size()), 2}, frame.segments.data(),
+              {"1", "line segments: pairs of indices into positions", ""});
     }
   } catch (...) {
     // Drop the partial group so the frame numbering and readers stay consistent.
@@ -337,6 +533,8 @@ void PointSeriesWriter::write_frame(const PointFrame& frame) {
     H5Eclear2(H5E_DEFAULT);
     throw;
   }
+  // The frame is complete; its statistics follow it into /series.
+  impl_->append_frame_statistics(index, frame);
   impl_->flush();
   impl_->frames.push_back(std::move(index));
   // Index after the data is on disk, so the .xmf never references a missing frame.
@@ -344,12 +542,21 @@ void PointSeriesWriter::write_frame(const PointFrame& frame) {
 }
 
 void PointSeriesWriter::write_series(const std::string& name, const std::vector<double>& times,
-                                     const std::vector<double>& values) {
+                                     const std::vector<double>& values, const SeriesInfo& info) {
   check_name(name, "series");
+  if (name.starts_with(kFramePrefix)) {
+    throw std::invalid_argument("cosim_output: series name '" + name + "' is reserved: names " +
+                                "starting with '" + kFramePrefix + "' are the frame statistics");
+  }
   if (times.size() != values.size()) {
     throw std::invalid_argument("cosim_output: series '" + name + "' has " +
                                 std::to_string(times.size()) + " times but " +
                                 std::to_string(values.size()) + " values");
+  }
+  if (info.reference_times.size() != info.reference_values.size()) {
+    throw std::invalid_argument("cosim_output: the reference of series '" + name + "' has " +
+                                std::to_string(info.reference_times.size()) + " times but " +
+                                std::to_string(info.reference_values.size()) + " values");
   }
   const Checker c = impl_->checker();
   const std::string g = "/series/" + name;
@@ -359,11 +566,32 @@ void PointSeriesWriter::write_series(const std::string& name, const std::vector<
     c.ok(H5Ldelete(series.get(), name.c_str(), H5P_DEFAULT), g, "deleting");
   }
   Handle group = c.create_group(series.get(), name, g);
+  const std::string unit = info.unit.empty() ? kUnspecified : info.unit;
+  const std::string description =
+      info.description.empty() ? "time series '" + name + "'" : info.description;
   const std::vector<hsize_t> dims{static_cast<hsize_t>(times.size())};
-  c.write(group.get(), "time", g + "/time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dims, times.data());
+  c.write(group.get(), "time", g + "/time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dims, times.data(),
+          {"s", "simulated time", ""});
   c.write(group.get(), "values", g + "/values", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dims,
-          values.data());
+          values.data(), {unit, description, ""});
+  if (!info.reference_times.empty()) {
+    const std::vector<hsize_t> reference_dims{static_cast<hsize_t>(info.reference_times.size())};
+    const std::string source =
+        info.reference_source.empty() ? "reference" : "reference: " + info.reference_source;
+    c.write(group.get(), "reference_time", g + "/reference_time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+            reference_dims, info.reference_times.data(),
+            {"s", "simulated time of the reference", ""});
+    c.write(group.get(), "reference_values", g + "/reference_values", H5T_IEEE_F64LE,
+            H5T_NATIVE_DOUBLE, reference_dims, info.reference_values.data(),
+            {unit, source + " for " + description, ""});
+  }
+  if (!info.reference_source.empty()) {
+    c.write_string(group.get(), "reference_source", info.reference_source, g);
+  }
   impl_->flush();
+  impl_->series[name] = detail::SeriesIndex{name, times, values};
+  // Frames already written now carry this series in the index too.
+  impl_->write_xdmf();
 }
 
 int PointSeriesWriter::frame_count() const {
@@ -440,6 +668,57 @@ PointFrame read_point_frame(const std::filesystem::path& h5_path, int index) {
     for (std::size_t i = 0; i < rows; ++i) frame.segments[i] = {flat[2 * i], flat[2 * i + 1]};
   }
   return frame;
+}
+
+std::vector<Series> read_series(const std::filesystem::path& h5_path) {
+  Handle file = open_for_reading(h5_path);
+  const Checker c{h5_path};
+  std::vector<Series> all;
+  if (!c.exists(file.get(), "series", "/series")) return all;
+  Handle group = c.open_group(file.get(), "/series", "/series");
+  for (const auto& name : c.children(group.get(), "/series")) {
+    const std::string g = "/series/" + name;
+    Handle one = c.open_group(group.get(), name, g);
+    Series series;
+    series.name = name;
+    std::size_t rows = 0, value_rows = 0;
+    series.times = c.read<double>(one.get(), "time", g + "/time", H5T_NATIVE_DOUBLE, 1, 0, rows);
+    series.values =
+        c.read<double>(one.get(), "values", g + "/values", H5T_NATIVE_DOUBLE, 1, 0, value_rows);
+    // A killed writer may have extended one of the two by a sample: keep the common part.
+    const std::size_t common = std::min(rows, value_rows);
+    series.times.resize(common);
+    series.values.resize(common);
+    {
+      Handle values = c.id(H5Dopen2(one.get(), "values", H5P_DEFAULT), H5Dclose, g + "/values",
+                           "opening dataset");
+      series.info.unit = c.read_string(values.get(), "unit", g + "/values");
+      series.info.description = c.read_string(values.get(), "description", g + "/values");
+    }
+    series.info.reference_source = c.read_string(one.get(), "reference_source", g);
+    if (c.exists(one.get(), "reference_time", g + "/reference_time")) {
+      series.info.reference_times = c.read<double>(
+          one.get(), "reference_time", g + "/reference_time", H5T_NATIVE_DOUBLE, 1, 0, rows);
+      series.info.reference_values =
+          c.read<double>(one.get(), "reference_values", g + "/reference_values", H5T_NATIVE_DOUBLE,
+                         1, 0, value_rows);
+      const std::size_t reference_common = std::min(rows, value_rows);
+      series.info.reference_times.resize(reference_common);
+      series.info.reference_values.resize(reference_common);
+    }
+    all.push_back(std::move(series));
+  }
+  return all;
+}
+
+FieldInfo read_field_info(const std::filesystem::path& h5_path, const std::string& dataset) {
+  Handle file = open_for_reading(h5_path);
+  const Checker c{h5_path};
+  Handle dset = c.id(H5Dopen2(file.get(), dataset.c_str(), H5P_DEFAULT), H5Dclose, dataset,
+                     "opening dataset");
+  return FieldInfo{c.read_string(dset.get(), "unit", dataset),
+                   c.read_string(dset.get(), "description", dataset),
+                   c.read_string(dset.get(), "legend", dataset)};
 }
 
 }  // namespace cosim::output

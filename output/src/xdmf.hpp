@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cosim::output::detail {
@@ -17,11 +18,30 @@ struct FrameIndex {
   std::vector<std::string> scalars;
   std::vector<std::string> vectors;
   std::vector<std::string> labels;
+  std::string
+      topology;  // the dataset of its Polyvertex connectivity, e.g. "/topology/polyvertex_9"
+  // Values of the frame as a whole (its statistics), shown as grid (field) data.
+  std::vector<std::pair<std::string, double>> grid_values;
 };
 
-// XDMF 3 temporal collection. `h5_name` is the HDF5 file name relative to the .xmf.
+// A series written by the caller, shown in each frame at the frame's time.
+struct SeriesIndex {
+  std::string name;
+  std::vector<double> times;
+  std::vector<double> values;
+};
+
+// The series' value at `time`: linear between samples, a sample itself within round-off; none
+// outside the sampled interval.
+bool sample_at(const SeriesIndex& series, double time, double& value);
+
+// XDMF 3 temporal collection. `h5_name` is the HDF5 file name relative to the .xmf. Points are
+// Polyvertex cells with explicit connectivity (the legacy Xdmf and the Xdmf3 readers of ParaView
+// both make one vertex cell per point from it); grid values and series are Grid-centred
+// attributes, which ParaView shows as field data.
 std::string render_xdmf(const std::string& title, const std::string& h5_name,
-                        const std::vector<FrameIndex>& frames);
+                        const std::vector<FrameIndex>& frames,
+                        const std::vector<SeriesIndex>& series = {});
 
 // Writes to a sibling temporary file and renames it over `path`, so a reader (or a killed run)
 // never sees a half-written index.

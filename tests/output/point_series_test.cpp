@@ -16,9 +16,14 @@
 
 namespace fs = std::filesystem;
 using cosim::output::count_point_frames;
+using cosim::output::FieldInfo;
 using cosim::output::PointFrame;
 using cosim::output::PointSeriesWriter;
+using cosim::output::read_field_info;
 using cosim::output::read_point_frame;
+using cosim::output::read_series;
+using cosim::output::Series;
+using cosim::output::SeriesInfo;
 
 namespace {
 
@@ -139,6 +144,59 @@ std::vector<double> read_raw(const fs::path& file, const std::string& dataset) {
   return out;
 }
 
+// Every dataset of a file, by full path.
+std::vector<std::string> datasets_of(const fs::path& file) {
+  std::vector<std::string> names;
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_file_locking(fapl, false, true);
+  hid_t f = H5Fopen(file.string().c_str(), H5F_ACC_RDONLY, fapl);
+  H5Pclose(fapl);
+  if (f < 0) return names;
+  struct Visit {
+    hid_t file;
+    std::vector<std::string>* names;
+  } visit{f, &names};
+  H5Lvisit(
+      f, H5_INDEX_NAME, H5_ITER_INC,
+      [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
+        auto* v = static_cast<Visit*>(data);
+        hid_t object = H5Oopen(v->file, name, H5P_DEFAULT);
+        if (object >= 0) {
+          if (H5Iget_type(object) == H5I_DATASET) v->names->push_back(std::string("/") + name);
+          H5Oclose(object);
+        }
+        return 0;
+      },
+      &visit);
+  H5Fclose(f);
+  return names;
+}
+
+const Series* find_series(const std::vector<Series>& all, const std::string& name) {
+  for (const auto& s : all) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+// The value of the Grid-centred attribute `name` in each frame grid of an XDMF file, in order;
+// NaN where a frame has none.
+std::vector<double> grid_values(const std::string& xml, const std::string& name) {
+  std::vector<double> values;
+  std::regex grid(R"re(<Grid Name="(frame_\d+|points)" GridType="Uniform">([\s\S]*?)</Grid>)re");
+  const std::regex value(
+      "<Attribute Name=\"" + name +
+      R"re(" AttributeType="Scalar" Center="Grid">\s*<DataItem[^>]*Format="XML">([^<]+)</DataItem>)re");
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), grid); it != std::sregex_iterator();
+       ++it) {
+    const std::string body = (*it)[2];
+    std::smatch m;
+    values.push_back(std::regex_search(body, m, value) ? std::stod(m[1])
+                                                       : std::numeric_limits<double>::quiet_NaN());
+  }
+  return values;
+}
+
 }  // namespace
 
 TEST_F(PointSeriesTest, RoundTripsFramesOfVaryingSizeBitExact) {
@@ -212,9 +270,12 @@ TEST_F(PointSeriesTest, XdmfIsWellFormedAndReferencesExistingDatasets) {
   EXPECT_TRUE(tags_balanced(xml)) << xml;
   EXPECT_NE(xml.find("CollectionType=\"Temporal\""), std::string::npos);
   EXPECT_NE(xml.find("river &lt;demo&gt; &amp; co"), std::string::npos);
-  // Outer temporal + 3 frames + (points, segments) for the chain frame.
-  EXPECT_EQ(count_of(xml, "<Grid "), 6u);
-  EXPECT_EQ(count_of(xml, "<Time "), 5u);
+  // One frame has segments, so every frame is a spatial collection (the legacy Xdmf reader
+  // needs one data type in all steps): outer temporal + 3 collections + 3 point grids + the
+  // chain frame's segment grid; a Time in each collection and each grid under it.
+  EXPECT_EQ(count_of(xml, "<Grid "), 8u);
+  EXPECT_EQ(count_of(xml, "<Time "), 7u);
+  EXPECT_EQ(count_of(xml, "CollectionType=\"Spatial\""), 3u);
   EXPECT_EQ(count_of(xml, "TopologyType=\"Polyline\""), 1u);
   EXPECT_EQ(count_of(xml, "TopologyType=\"Polyvertex\""), 3u);
   for (const char* name : {"pressure", "density", "velocity", "kind", "plant"}) {
@@ -338,8 +399,8 @@ TEST_F(PointSeriesTest, WriterDestroyedMidRunLeavesReadableFile) {
   }
   ASSERT_EQ(count_point_frames(stem.string() + ".h5"), 3);
   expect_frames_equal(make_frame(7, 0.2, 2, false), read_point_frame(stem.string() + ".h5", -1));
-  EXPECT_EQ(count_of(slurp(stem.string() + ".xmf"), "<Time "),
-            5u);  // frame 1 has segments: 3 Times
+  // Frame 1 has segments, so all three are collections: 2 Times each, 3 for frame 1.
+  EXPECT_EQ(count_of(slurp(stem.string() + ".xmf"), "<Time "), 7u);
 }
 
 TEST_F(PointSeriesTest, KilledWriterLeavesFileReadableUpToLastFrame) {
@@ -367,4 +428,179 @@ TEST_F(PointSeriesTest, KilledWriterLeavesFileReadableUpToLastFrame) {
   EXPECT_TRUE(tags_balanced(slurp(stem.string() + ".xmf")));
   EXPECT_EQ(read_raw(stem.string() + ".h5", "/series/tip/values"),
             (std::vector<double>{0.5, 0.25}));
+}
+
+TEST_F(PointSeriesTest, EveryDatasetCarriesUnitAndDescriptionAndLabelsTheirLegend) {
+  const fs::path stem = dir_ / "described";
+  {
+    PointSeriesWriter writer(stem, "described");
+    writer.describe("pressure", {"Pa", "pressure solved by the Poisson equation", ""});
+    writer.describe("velocity", {"m/s", "particle velocity", ""});
+    writer.describe("kind", {"1", "particle kind", "0 fluid, 1 wall, 2 dummy"});
+    EXPECT_THROW(writer.describe("a/b", {}), std::invalid_argument);
+    writer.write_frame(make_frame(4, 0.0, 1, true));  // density and plant stay undescribed
+    writer.write_frame(make_frame(3, 0.5, 2, false));
+    writer.write_series("tip", {0.0, 0.5}, {0.1, 0.2}, {"m", "tip displacement", {}, {}, ""});
+    writer.write_series("bare", {0.0}, {1.0});
+  }
+  const fs::path h5 = stem.string() + ".h5";
+  const auto names = datasets_of(h5);
+  ASSERT_GT(names.size(), 20u);
+  for (const auto& name : names) {
+    SCOPED_TRACE(name);
+    const FieldInfo info = read_field_info(h5, name);
+    EXPECT_FALSE(info.unit.empty());
+    EXPECT_FALSE(info.description.empty());
+  }
+  auto info = [&](const std::string& dataset) { return read_field_info(h5, dataset); };
+  EXPECT_EQ(info("/frames/000000/positions").unit, "m");
+  EXPECT_EQ(info("/frames/000001/scalars/pressure").unit, "Pa");
+  EXPECT_EQ(info("/frames/000001/scalars/pressure").description,
+            "pressure solved by the Poisson equation");
+  EXPECT_EQ(info("/frames/000000/vectors/velocity").unit, "m/s");
+  EXPECT_EQ(info("/frames/000000/labels/kind").legend, "0 fluid, 1 wall, 2 dummy");
+  EXPECT_EQ(info("/frames/000000/labels/kind").description, "particle kind");
+  // Undescribed fields say so and name themselves; labels are dimensionless.
+  EXPECT_EQ(info("/frames/000000/scalars/density").unit, "unspecified");
+  EXPECT_NE(info("/frames/000000/scalars/density").description.find("density"), std::string::npos);
+  EXPECT_EQ(info("/frames/000000/labels/plant").unit, "1");
+  EXPECT_TRUE(info("/frames/000000/labels/plant").legend.empty());
+  EXPECT_EQ(info("/frames/000000/segments").unit, "1");
+  EXPECT_EQ(info("/series/tip/time").unit, "s");
+  EXPECT_EQ(info("/series/tip/values").unit, "m");
+  EXPECT_EQ(info("/series/tip/values").description, "tip displacement");
+  EXPECT_EQ(info("/series/bare/values").unit, "unspecified");
+  // Statistics inherit the unit of their field.
+  EXPECT_EQ(info("/series/frame_pressure_max/values").unit, "Pa");
+  EXPECT_EQ(info("/series/frame_velocity_max_magnitude/values").unit, "m/s");
+}
+
+TEST_F(PointSeriesTest, FramesFillTheSeriesGroupWithTheirStatistics) {
+  const fs::path stem = dir_ / "statistics";
+  PointFrame a;
+  a.time = 0.0;
+  a.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  a.scalars["pressure"] = {1.0, -2.0, 4.0};
+  a.vectors["velocity"] = {{3, 4, 0}, {0, 0, 1}, {0, 0, 0}};
+  PointFrame b = a;
+  b.time = 0.25;
+  b.positions.pop_back();
+  b.scalars["pressure"] = {10.0, 20.0};
+  b.vectors["velocity"] = {{0, 0, 0}, {0, 12, 5}};
+  PointFrame empty;
+  empty.time = 0.5;
+  {
+    PointSeriesWriter writer(stem, "statistics");
+    writer.write_frame(a);
+    writer.write_frame(b);
+    writer.write_frame(empty);
+    EXPECT_THROW(writer.write_series("frame_points", {0.0}, {1.0}), std::invalid_argument);
+  }
+  const auto all = read_series(stem.string() + ".h5");
+  const auto* points = find_series(all, "frame_points");
+  ASSERT_NE(points, nullptr);
+  EXPECT_EQ(points->times, (std::vector<double>{0.0, 0.25, 0.5}));
+  EXPECT_EQ(points->values, (std::vector<double>{3, 2, 0}));
+  const auto* low = find_series(all, "frame_pressure_min");
+  const auto* high = find_series(all, "frame_pressure_max");
+  const auto* mean = find_series(all, "frame_pressure_mean");
+  const auto* speed = find_series(all, "frame_velocity_max_magnitude");
+  ASSERT_TRUE(low && high && mean && speed);
+  EXPECT_EQ(low->values, (std::vector<double>{-2.0, 10.0}));
+  EXPECT_EQ(high->values, (std::vector<double>{4.0, 20.0}));
+  EXPECT_EQ(mean->values, (std::vector<double>{1.0, 15.0}));
+  EXPECT_EQ(speed->values, (std::vector<double>{5.0, 13.0}));
+  EXPECT_EQ(speed->times, (std::vector<double>{0.0, 0.25}));
+  EXPECT_EQ(all.size(), 5u);
+}
+
+TEST_F(PointSeriesTest, SeriesKeepTheirReferenceAndSource) {
+  const fs::path stem = dir_ / "reference";
+  {
+    PointSeriesWriter writer(stem, "reference");
+    SeriesInfo info;
+    info.unit = "m";
+    info.description = "surge front position";
+    info.reference_times = {0.0, 1.0, 2.0};
+    info.reference_values = {0.1, 0.3, 0.6};
+    info.reference_source = "Martin & Moyce (1952)";
+    writer.write_series("front", {0.0, 0.5}, {0.1, 0.2}, info);
+    info.reference_values.pop_back();
+    EXPECT_THROW(writer.write_series("bad", {0.0}, {0.0}, info), std::invalid_argument);
+  }
+  const auto all = read_series(stem.string() + ".h5");
+  const auto* front = find_series(all, "front");
+  ASSERT_NE(front, nullptr);
+  EXPECT_EQ(front->times, (std::vector<double>{0.0, 0.5}));
+  EXPECT_EQ(front->values, (std::vector<double>{0.1, 0.2}));
+  EXPECT_EQ(front->info.unit, "m");
+  EXPECT_EQ(front->info.description, "surge front position");
+  EXPECT_EQ(front->info.reference_times, (std::vector<double>{0.0, 1.0, 2.0}));
+  EXPECT_EQ(front->info.reference_values, (std::vector<double>{0.1, 0.3, 0.6}));
+  EXPECT_EQ(front->info.reference_source, "Martin & Moyce (1952)");
+  EXPECT_EQ(find_series(all, "bad"), nullptr);
+  EXPECT_EQ(read_field_info(stem.string() + ".h5", "/series/front/reference_values").unit, "m");
+}
+
+TEST_F(PointSeriesTest, XdmfPointsHaveExplicitVertexConnectivity) {
+  const fs::path stem = dir_ / "cells";
+  PointSeriesWriter writer(stem, "cells");
+  writer.write_frame(make_frame(4, 0.0, 1, false));
+  writer.write_frame(make_frame(6, 0.25, 2, true));
+  writer.write_frame(make_frame(4, 0.5, 3, false));
+  const std::string xml = slurp(writer.xdmf_path());
+  EXPECT_TRUE(tags_balanced(xml)) << xml;
+  // Every Polyvertex topology lists its cells: 0..n-1 from a dataset of n entries.
+  std::regex topology(
+      R"re(<Topology TopologyType="Polyvertex" NumberOfElements="(\d+)" NodesPerElement="1">\s*<DataItem Dimensions="(\d+)" NumberType="Int" Precision="4" Format="HDF">cells\.h5:([^<]+)</DataItem>\s*</Topology>)re");
+  int found = 0;
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), topology);
+       it != std::sregex_iterator(); ++it, ++found) {
+    const std::size_t n = std::stoul((*it)[1]);
+    EXPECT_EQ(std::stoul((*it)[2]), n);
+    const FieldInfo info = read_field_info(writer.h5_path(), (*it)[3]);
+    EXPECT_EQ(info.unit, "1");
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_file_locking(fapl, false, true);
+    hid_t f = H5Fopen(writer.h5_path().string().c_str(), H5F_ACC_RDONLY, fapl);
+    H5Pclose(fapl);
+    ASSERT_GE(f, 0);
+    hid_t d = H5Dopen2(f, (*it)[3].str().c_str(), H5P_DEFAULT);
+    ASSERT_GE(d, 0);
+    hid_t space = H5Dget_space(d);
+    std::vector<int> cells(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    H5Dread(d, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, cells.data());
+    H5Sclose(space);
+    H5Dclose(d);
+    H5Fclose(f);
+    ASSERT_EQ(cells.size(), n);
+    for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(cells[i], static_cast<int>(i));
+  }
+  EXPECT_EQ(found, 3);
+  EXPECT_EQ(count_of(xml, "TopologyType=\"Polyvertex\""), 3u);
+  // Frames of the same size share one connectivity dataset.
+  EXPECT_EQ(count_of(xml, "cells.h5:/topology/polyvertex_4<"), 2u);
+}
+
+TEST_F(PointSeriesTest, XdmfFramesCarryStatisticsAndSeriesAsGridValues) {
+  const fs::path stem = dir_ / "grid";
+  PointSeriesWriter writer(stem, "grid");
+  writer.write_frame(make_frame(4, 0.0, 1, false));
+  writer.write_frame(make_frame(6, 0.25, 2, true));
+  writer.write_frame(make_frame(5, 0.5, 3, false));
+  EXPECT_EQ(grid_values(slurp(writer.xdmf_path()), "frame_points"), (std::vector<double>{4, 6, 5}));
+  // A series written at the end is indexed into the frames already written: its samples at
+  // the frame times, linear between samples, nothing outside the sampled interval.
+  writer.write_series("tip", {0.0, 0.2, 0.3}, {1.0, 2.0, 3.0});
+  const std::string xml = slurp(writer.xdmf_path());
+  EXPECT_TRUE(tags_balanced(xml)) << xml;
+  const auto tip = grid_values(xml, "tip");
+  ASSERT_EQ(tip.size(), 3u);
+  EXPECT_DOUBLE_EQ(tip[0], 1.0);
+  EXPECT_DOUBLE_EQ(tip[1], 2.5);
+  EXPECT_TRUE(std::isnan(tip[2])) << "0.5 s is after the last sample";
+  const PointFrame second = make_frame(6, 0.25, 2, true);
+  const auto& pressure = second.scalars.at("pressure");
+  EXPECT_DOUBLE_EQ(grid_values(xml, "frame_pressure_max")[1],
+                   *std::max_element(pressure.begin(), pressure.end()));
 }

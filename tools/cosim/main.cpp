@@ -4,7 +4,9 @@
 
 #include <cstdlib>
 
+#include "cosim_version.hpp"
 #include "network.hpp"
+#include "plot.hpp"
 #include "replay_command.hpp"
 #include "runner.hpp"
 #include "sweep.hpp"
@@ -38,6 +40,7 @@ bool ensure_network(const std::string& mode, int argc, char** argv) {
 
 int main(int argc, char** argv) {
   CLI::App app{"cosim: particle co-simulation of river flows with plants and debris"};
+  app.set_version_flag("--version", std::string("cosim ") + tool::kVersion);
   app.require_subcommand(1);
 
   std::filesystem::path bundle;
@@ -66,7 +69,12 @@ int main(int argc, char** argv) {
                      "auto: private network namespace when multicast is unavailable; host; "
                      "private")
         ->check(CLI::IsMember({"auto", "host", "private"}));
-    command->add_flag("--quiet", quiet, "no progress line");
+    command->add_flag("--quiet", quiet, "no progress lines");
+    command
+        ->add_option("--progress-interval", request.progress_interval,
+                     "seconds between progress lines (default: 1 on a terminal, where the line "
+                     "is redrawn; 10 otherwise, as plain lines)")
+        ->check(CLI::Range(0.0, 86400.0));
   };
 
   auto* run = app.add_subcommand("run", "run a scenario bundle");
@@ -87,6 +95,16 @@ int main(int argc, char** argv) {
   sweep_command->add_option("--values", sweep.values, "its values, one run each")->required();
   add_run_options(sweep_command);
   add_overrides(sweep_command);
+  bool no_plot = false;
+  sweep_command->add_flag("--no-plot", no_plot,
+                          "no error-vs-run-time figure (PNG beside the CSV, needs matplotlib)");
+
+  std::filesystem::path plot_dir;
+  auto* plot_command = app.add_subcommand(
+      "plot", "draw each metric's time series against its reference, as PNGs in the run folder");
+  plot_command->add_option("run_dir", plot_dir, "a run folder")
+      ->required()
+      ->check(CLI::ExistingDirectory);
 
   tool::ReplayRequest replay;
   auto* replay_command = app.add_subcommand(
@@ -116,9 +134,17 @@ int main(int argc, char** argv) {
       tool::print_report(outcome.run_dir);
       return outcome.exit_code;
     }
+    if (plot_command->parsed()) {
+      std::vector<std::string> notes;
+      const auto files = tool::plot_run(plot_dir, notes);
+      for (const auto& note : notes) fmt::print("{}\n", note);
+      for (const auto& file : files) fmt::print("figure written to {}\n", file.string());
+      return 0;
+    }
     if (sweep_command->parsed()) {
       sweep.overrides = overrides;
       sweep.run = request;
+      sweep.plot = !no_plot;
       if (!ensure_network(network, argc, argv)) return 2;
       return tool::sweep(sweep);
     }

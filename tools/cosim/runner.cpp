@@ -7,12 +7,14 @@
 #include <chrono>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 
 #include <stdlib.h>
 
 #include "cosim/coupler/bus.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "progress.hpp"
 
 namespace cosim::tool {
 
@@ -83,8 +85,15 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   options.run_id = run_id;
   options.event_log = outcome.run_dir / "events.lcmlog";
   options.loss_probability = request.loss_probability;
-  options.show_progress = request.show_progress;
+  // The progress lines (with an estimate of the time left) come from our own monitor.
+  options.show_progress = false;
   coupler::Coupler coupler(scene, options);
+  std::optional<ProgressMonitor> progress;
+  if (request.show_progress) {
+    progress.emplace(ProgressMonitor::Options{url, run_id, label, scene.duration,
+                                              scene.total_windows(), request.progress_interval,
+                                              stderr});
+  }
 
   coupler::ProcessGroup processes;
   const auto bin = coupler::executable_dir();
@@ -110,6 +119,10 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   }
   outcome.result = coupler.run(processes);
   const auto& result = outcome.result;
+  if (progress) {
+    progress->finish(result.ok, result.windows_completed, result.simulated_time,
+                     result.wall_seconds);
+  }
   outcome.exit_code = result.ok ? 0 : 1;
 
   nlohmann::json summary;
@@ -134,6 +147,7 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
                             {"executable", entry.executable},
                             {"role", scenario::role_name(entry.role)},
                             {"compute_seconds", report.compute_seconds},
+                            {"cpu_seconds", report.cpu_seconds},
                             {"coupling_wait_seconds", report.wait_seconds},
                             {"windows", report.windows},
                             {"steps", report.steps},

@@ -19,6 +19,8 @@ struct RunRequest {
   double loss_probability = 0.0;              // injected loss of received messages, every process
   std::map<std::string, std::string> faults;  // participant -> "exit@W" / "hang@W" / "throw@W"
   bool show_progress = true;
+  double progress_interval =
+      0.0;  // seconds between progress lines; 0: 1 s on a terminal, else 10 s
 };
 
 struct RunOutcome {

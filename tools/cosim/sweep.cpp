@@ -3,8 +3,12 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
+#include <cstdio>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+
+#include "plot.hpp"
 
 namespace cosim::tool {
 
@@ -34,7 +38,70 @@ scenario::Scene load_with_overrides(const std::filesystem::path& bundle,
   return scenario::load_scene(document, file, participant_parsers());
 }
 
+nlohmann::json sweep_figure(const std::string& scene, const std::string& vary,
+                            const std::vector<SweepRow>& rows, const std::filesystem::path& file) {
+  const std::string key = vary.substr(vary.rfind('.') + 1);
+  // metric -> (wall, value or error, label), in the order of the runs.
+  std::map<std::string, nlohmann::json> errors, values;
+  std::map<std::string, std::string> units;
+  for (const auto& row : rows) {
+    for (const auto& [name, metric] : row.metrics) {
+      const std::string label = key + "=" + row.value;
+      if (metric.contains("relative_error") && metric["relative_error"].is_number()) {
+        auto& curve = errors[name];
+        curve["x"].push_back(row.wall);
+        curve["y"].push_back(100 * metric["relative_error"].get<double>());
+        curve["annotations"].push_back(label);
+      }
+      if (metric.contains("value") && metric["value"].is_number()) {
+        auto& curve = values[name];
+        curve["x"].push_back(row.wall);
+        curve["y"].push_back(metric["value"].get<double>());
+        curve["annotations"].push_back(label);
+        units[name] = metric.value("unit", "");
+      }
+    }
+  }
+  nlohmann::json figure{{"file", file.string()}};
+  if (!errors.empty()) {
+    nlohmann::json lines = nlohmann::json::array();
+    for (auto& [name, curve] : errors) {
+      curve["label"] = name;
+      curve["style"] = "points";
+      lines.push_back(curve);
+    }
+    figure["title"] = fmt::format("{}: error against run time, varying {}", scene, vary);
+    figure["xlabel"] = "wall time [s]";
+    figure["ylabel"] = "relative error [%]";
+    figure["xscale"] = "log";
+    figure["yscale"] = "log";
+    figure["lines"] = lines;
+    return figure;
+  }
+  // No metric has a reference here: show how each value moves with the cost.
+  nlohmann::json panels = nlohmann::json::array();
+  for (auto& [name, curve] : values) {
+    curve["label"] = name;
+    curve["style"] = "points";
+    const std::string& unit = units[name];
+    panels.push_back({{"title", name},
+                      {"xlabel", "wall time [s]"},
+                      {"ylabel", unit.empty() ? name : fmt::format("{} [{}]", name, unit)},
+                      {"xscale", "log"},
+                      {"lines", nlohmann::json::array({curve})}});
+  }
+  if (panels.empty()) {
+    panels.push_back({{"title", "no metric reported"}, {"xlabel", "wall time [s]"}});
+  }
+  figure["title"] =
+      fmt::format("{}: metrics against run time, varying {} (no reference)", scene, vary);
+  figure["panels"] = panels;
+  return figure;
+}
+
 int sweep(const SweepRequest& request) {
+  // Before any run: a sweep may take hours, and its figure needs matplotlib.
+  if (request.plot) plotting_python();
   const auto file = scenario_file_of(request.bundle);
   const YAML::Node original = scenario::load_yaml_file(file);
   // Check every variant before running any.
@@ -45,17 +112,12 @@ int sweep(const SweepRequest& request) {
     scenario::apply_override(document, request.vary, value);
     scenes.push_back(scenario::load_scene(document, file, participant_parsers()));
   }
-  struct Row {
-    std::string value;
-    bool ok = false;
-    double wall = 0;
-    std::vector<std::pair<std::string, nlohmann::json>> metrics;
-    std::filesystem::path run_dir;
-  };
+  using Row = SweepRow;
   std::vector<Row> rows;
   int exit_code = 0;
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     fmt::print("sweep {}/{}: {} = {}\n", i + 1, scenes.size(), request.vary, request.values[i]);
+    std::fflush(stdout);  // before the run's progress lines on stderr
     RunRequest run = request.run;
     run.run_label = fmt::format("sweep{}", i + 1);
     const auto outcome = run_scene(scenes[i], run);
@@ -108,7 +170,20 @@ int sweep(const SweepRequest& request) {
                          row.run_dir.string());
     }
   }
+  csv.close();
   fmt::print("\ntable written to {}\n", csv_path.string());
+  if (request.plot) {
+    auto png_path = csv_path;
+    png_path.replace_extension(".png");
+    try {
+      draw_figures(
+          {{"figures", {sweep_figure(scenes.front().name, request.vary, rows, png_path)}}});
+      fmt::print("figure written to {}\n", png_path.string());
+    } catch (const PlotError& error) {
+      fmt::print(stderr, "error: no figure ({}); the table is complete\n", error.what());
+      return exit_code != 0 ? exit_code : 2;
+    }
+  }
   return exit_code;
 }
 
