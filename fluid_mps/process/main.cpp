@@ -117,6 +117,10 @@ class FluidProcess final : public coupler::Solver {
     if (config_.observation) {
       observation_.emplace(config_.observation->points, config_.observation->radius);
     }
+    writer_.describe("velocity", {"m/s", "particle velocity (world frame)", ""});
+    writer_.describe("pressure", {"Pa", "particle pressure", ""});
+    writer_.describe("number_density", {"1", "MPS particle number density at r*", ""});
+    writer_.describe("kind", {"1", "particle kind", "0 fluid, 1 wall, 2 dummy, 3 inactive"});
     spdlog::info("{} particles, l0 = {} m, stable dt {:.3g} s", system_->particle_count(),
                  config_.parameters.particle_spacing, system_->stable_dt());
   }
@@ -147,7 +151,14 @@ class FluidProcess final : public coupler::Solver {
   }
 
   void finish(coupler::MetricsReport& report) override {
-    if (reference_) reference_->report(report);
+    if (reference_) {
+      reference_->report(report);
+      for (const auto& s : reference_->series()) {
+        writer_.write_series(
+            s.name, s.times, s.values,
+            {s.unit, s.description, s.reference_times, s.reference_values, s.source});
+      }
+    }
     if (fishway_) fishway_->report(report);
     if (observation_) observation_->write_csv((output_dir_ / "observation_points.csv").string());
     auto& info = report.info();

@@ -208,4 +208,37 @@ void ReferenceTracker::report(coupler::MetricsReport& report) const {
   }
 }
 
+std::vector<ReferenceSeries> ReferenceTracker::series() const {
+  if (settings_.kind != "martin_moyce") return {};
+  const double a = settings_.column_width;
+  const char* source = "Martin & Moyce (1952), tables 2 and 6";
+  // Back from Z = x/a at T = t sqrt(2g/a), and H = h/(2a) at tau = t sqrt(g/a).
+  auto dimensional = [](const Curve& curve, double time_scale, double length_scale,
+                        ReferenceSeries series) {
+    for (std::size_t i = 0; i < curve.x.size(); ++i) {
+      series.reference_times.push_back(curve.x[i] / time_scale);
+      series.reference_values.push_back(curve.y[i] * length_scale);
+    }
+    return series;
+  };
+  return {dimensional(front_reference_, std::sqrt(2 * gravity_ / a), a,
+                      {"surge_front",
+                       "m",
+                       "position of the surge front on the tank floor",
+                       source,
+                       times_,
+                       fronts_,
+                       {},
+                       {}}),
+          dimensional(height_reference_, std::sqrt(gravity_ / a), 2 * a,
+                      {"residual_height",
+                       "m",
+                       "height of the water column at the back wall",
+                       source,
+                       times_,
+                       heights_,
+                       {},
+                       {}})};
+}
+
 }  // namespace cosim::mps

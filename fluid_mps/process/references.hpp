@@ -22,6 +22,12 @@ struct FluidImpulses {
   Eigen::Vector3d fluid_pressure = Eigen::Vector3d::Zero();  // fluid-fluid: non-conservation
 };
 
+// A time series with its measured reference curve, in SI units, for the output file.
+struct ReferenceSeries {
+  std::string name, unit, description, source;
+  std::vector<double> times, values, reference_times, reference_values;
+};
+
 // Samples the run at the end of every window and reports against the reference at the end.
 class ReferenceTracker {
  public:
@@ -29,6 +35,8 @@ class ReferenceTracker {
   void observe(const FluidSystem& system, const FluidImpulses& impulses,
                const ObservationPoints* observation);
   void report(coupler::MetricsReport& report) const;
+  // The observed series behind the metrics (dam break: surge front, residual height).
+  std::vector<ReferenceSeries> series() const;
 
  private:
   struct Curve {
