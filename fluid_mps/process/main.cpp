@@ -130,6 +130,7 @@ class FluidProcess final : public coupler::Solver {
   void write_output() override { writer_.write_frame(make_frame(*system_, config_.frame)); }
 
   coupler::WindowResult initial_window(const coupler::Window& window) override {
+    initial_momentum_ = system_->total_fluid_momentum();
     return advance(window);
   }
 
@@ -181,6 +182,14 @@ class FluidProcess final : public coupler::Solver {
     info["solid_reaction_impulse"] = json(config_.frame.force_to_world(impulses_.solids));
     info["undelivered_solid_force_impulse"] = json(config_.frame.force_to_world(undelivered_));
     info["out_of_plane_solid_force_impulse"] = json(link_.out_of_plane_impulse());
+    // Momentum budget of the fluid (closed domains): its momentum change against every source
+    // (gravity, walls, pressure, collisions, solids), relative to the gravity and solid impulses.
+    // Open boundaries add and remove particles, which the budget does not follow.
+    const Eigen::Vector3d change = system_->total_fluid_momentum() - initial_momentum_;
+    if (!open_boundaries_ && budget_scale_ > 0.0) {
+      info["momentum_budget_residual"] = (change - budget_sources_).norm() / budget_scale_;
+    }
+    info["fluid_momentum_change"] = json(config_.frame.force_to_world(change));
   }
 
  private:
@@ -216,6 +225,9 @@ class FluidProcess final : public coupler::Solver {
     for (int piece = 0; piece < pieces; ++piece) {
       const auto step = system_->step(window.dt / pieces);
       impulses_.solids += step.external_impulse;
+      budget_sources_ += step.body_impulse + step.wall_viscous_force * (window.dt / pieces) +
+                         step.collision_impulse + step.pressure_impulse + step.external_impulse;
+      budget_scale_ += step.body_impulse.norm() + step.external_impulse.norm();
       impulses_.wall_viscous += step.wall_viscous_force * (window.dt / pieces);
       impulses_.wall_collision += step.wall_collision_impulse;
       impulses_.wall_pressure += step.wall_pressure_impulse;
@@ -242,6 +254,9 @@ class FluidProcess final : public coupler::Solver {
   int most_pcg_iterations_ = 0;
   Eigen::Vector3d undelivered_ = Eigen::Vector3d::Zero();
   mps::FluidImpulses impulses_;  // momentum the fluid received, by source
+  Eigen::Vector3d initial_momentum_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d budget_sources_ = Eigen::Vector3d::Zero();
+  double budget_scale_ = 0.0;
   std::vector<double> water_, surface_;
 };
 

@@ -263,9 +263,13 @@ StepReport FluidSystem::step(double dt) {
   }
   for (int i = 0; i < n; ++i) {
     report.wall_viscous_force += wall_viscous[i];
-    if (is_fluid(kinds_[i])) report.external_impulse += external_accelerations_[i];
+    if (is_fluid(kinds_[i])) {
+      report.external_impulse += external_accelerations_[i];
+      report.body_impulse += p.gravity + driving;
+    }
   }
   report.external_impulse *= particle_mass_ * dt;
+  report.body_impulse *= particle_mass_ * dt;
   report.wall_viscous_force *= particle_mass_ * viscous_factor;
   for (int i = 0; i < n; ++i) {
     if (!position_star[i].allFinite() || !velocity_star[i].allFinite()) {

@@ -45,6 +45,8 @@ void expect_momentum_balance(const std::string& extra_options, const std::string
       << " booked " << booked.transpose();
   // Nearly all of it reaches fluid particles (plant nodes in air have nothing to push).
   EXPECT_LT(undelivered.norm(), 0.5 * received.norm());
+  // The fluid's own momentum budget (gravity, walls, pressure, collisions, plants) closes.
+  EXPECT_LT(fluid["momentum_budget_residual"].get<double>(), 1e-12);
   // The plants stand in the x-z plane of the 2D fluid: nothing is out of it.
   EXPECT_EQ(out_of_plane.norm(), 0.0);
 }

@@ -32,6 +32,11 @@ struct StepReport {
   Eigen::Vector3d wall_pressure_impulse = Eigen::Vector3d::Zero();
   // Momentum the fluid received in this step from the point forces (set_point_forces).
   Eigen::Vector3d external_impulse = Eigen::Vector3d::Zero();
+  // Gravity and the periodic driving body force on the fluid particles in this step. With the
+  // wall viscous force, collision, pressure and external impulses it is everything that changes
+  // the fluid's momentum (fluid-fluid viscosity and collisions cancel in pairs): the budget of a
+  // closed domain closes to round-off.
+  Eigen::Vector3d body_impulse = Eigen::Vector3d::Zero();
 };
 
 // Result of apply_point_forces: forces of points with no fluid inside the radius are dropped.
