@@ -23,7 +23,7 @@ std::string failure_of(const CommandResult& result) {
 
 double tip_of(const CommandResult& result) {
   const auto summary = read_summary(run_folder_of(result));
-  return summary["participants"][1]["report"]["metrics"]["tip_streamwise_displacement"]["value"]
+  return summary["participants"][1]["report"]["metrics"]["tip_streamwise_position"]["value"]
       .get<double>();
 }
 

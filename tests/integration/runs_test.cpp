@@ -40,6 +40,8 @@ TEST(Runs, BladeRunWritesEveryOutputOfARunFolder) {
     EXPECT_EQ(participant["windows"].get<int>(), 21) << participant.dump();  // window 0 included
     EXPECT_GE(participant["compute_seconds"].get<double>(), 0.0);
     EXPECT_GE(participant["coupling_wait_seconds"].get<double>(), 0.0);
+    // CPU time of the process: positive, and a solver that mostly waits uses less than its wall.
+    EXPECT_GT(participant["cpu_seconds"].get<double>(), 0.0) << participant.dump();
   }
   const auto& beam = summary["participants"][1];
   EXPECT_EQ(beam["name"], "vegetation_beam");

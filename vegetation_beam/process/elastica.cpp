@@ -1,9 +1,11 @@
 #include "elastica.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 namespace cosim::vegetation {
 
@@ -38,11 +40,15 @@ State add(const State& y, const State& dy, double h) {
 }
 
 // Integrates from the tip (angle tip_angle, no load, no moment) to the base with RK4. Returns
-// the base angle; fills the tip position when asked.
+// the base angle; fills the tip position and the shape when asked.
 double shoot(const ElasticaProblem& p, double tip_angle, ElasticaSolution* solution) {
   const double h = -p.length / p.steps;
   State y{tip_angle, 0.0, 0.0, 0.0};
+  // Shape from the tip, positions relative to the tip until the base is known.
+  std::vector<ElasticaPoint> from_tip;
+  if (solution) from_tip.reserve(p.steps + 1);
   double streamwise = 0.0, height = 0.0;
+  if (solution) from_tip.push_back({p.length, tip_angle, 0.0, 0.0});
   for (int step = 0; step < p.steps; ++step) {
     const State k1 = derivative(p, y);
     const State k2 = derivative(p, add(y, k1, h / 2));
@@ -57,36 +63,73 @@ double shoot(const ElasticaProblem& p, double tip_angle, ElasticaSolution* solut
     streamwise += -h * 0.5 * (std::sin(y.theta) + std::sin(next.theta));
     height += -h * 0.5 * (std::cos(y.theta) + std::cos(next.theta));
     y = next;
+    if (solution) from_tip.push_back({p.length + (step + 1) * h, y.theta, -streamwise, -height});
   }
   if (solution) {
     solution->tip_streamwise = streamwise;
     solution->tip_height = height;
     solution->tip_angle = tip_angle;
+    solution->shape.assign(from_tip.rbegin(), from_tip.rend());
+    for (ElasticaPoint& point : solution->shape) {
+      point.streamwise += streamwise;
+      point.height += height;
+    }
+    solution->shape.front().s = 0.0;
   }
   return y.theta;
 }
 
 }  // namespace
 
+bool is_monotone(const std::vector<ElasticaPoint>& shape, double tolerance) {
+  double highest = -std::numeric_limits<double>::infinity();
+  for (const ElasticaPoint& point : shape) {
+    if (point.angle < highest - tolerance) return false;
+    highest = std::max(highest, point.angle);
+  }
+  return true;
+}
+
 ElasticaSolution solve_elastica(const ElasticaProblem& problem) {
   if (problem.length <= 0 || problem.bending_stiffness <= 0 || problem.steps < 10) {
     throw std::runtime_error(
         "elastica reference: length, bending stiffness and steps must be positive");
   }
-  // The base angle must be 0 (clamped). Scan the tip angle for a sign change, then bisect.
-  const int scan = 400;
-  const double top = std::numbers::pi / 2 * (1 - 1e-9);
-  double low = 0.0;
-  double residual_low = shoot(problem, low, nullptr);
+  // The base angle must be 0 (clamped): find the tip angles where it changes sign. Above a
+  // Cauchy number Ca = rho C_D b U^2 L^3 / (2 EI) of about 100 there are several, and the
+  // smallest tip angle belongs to a shape that swings back against the stream (measured: Ca 300
+  // has 3 clamped equilibria, Ca 3000 has 7, only the one with the largest tip angle is
+  // monotone). The monotone tip angle approaches pi/2 as Ca grows (pi/2 - 0.114 at Ca 300,
+  // - 0.020 at Ca 3000, - 0.0067 at Ca 1e4) and neighbouring roots crowd there, so the scan
+  // is geometric in pi/2 - angle (5.9 % steps from pi/2 * 1e-9 up to pi/2, good past
+  // Ca 1e10) and walks down from the top, keeping the first monotone equilibrium.
+  const double quarter = std::numbers::pi / 2;
+  constexpr int scan = 360;
+  constexpr double smallest_gap = 1e-9;  // of pi/2
+  auto angle_at = [&](int i) {           // i = 0 near pi/2, i = scan: 0
+    return i == scan ? 0.0 : quarter * (1 - std::pow(smallest_gap, 1.0 - double(i) / scan));
+  };
   ElasticaSolution solution;
-  if (residual_low == 0.0) {
-    shoot(problem, 0.0, &solution);
-    return solution;
-  }
+  int rejected = 0;
+  auto accept = [&](double tip_angle) {
+    ElasticaSolution candidate;
+    shoot(problem, tip_angle, &candidate);
+    if (!is_monotone(candidate.shape)) {
+      ++rejected;
+      return false;
+    }
+    solution = std::move(candidate);
+    return true;
+  };
+  double high = angle_at(0);
+  double residual_high = shoot(problem, high, nullptr);
+  if (residual_high == 0.0 && accept(high)) return solution;
   for (int i = 1; i <= scan; ++i) {
-    const double high = top * i / scan;
-    const double residual_high = shoot(problem, high, nullptr);
-    if ((residual_low < 0) != (residual_high < 0)) {
+    const double low = angle_at(i);
+    const double residual_low = shoot(problem, low, nullptr);
+    if (residual_low == 0.0) {
+      if (accept(low)) return solution;
+    } else if ((residual_low < 0) != (residual_high < 0) && residual_high != 0.0) {
       double a = low, b = high, fa = residual_low;
       for (int iteration = 0; iteration < 200 && b - a > 1e-15; ++iteration) {
         const double m = 0.5 * (a + b);
@@ -98,14 +141,14 @@ ElasticaSolution solve_elastica(const ElasticaProblem& problem) {
           b = m;
         }
       }
-      shoot(problem, 0.5 * (a + b), &solution);
-      return solution;
+      if (accept(0.5 * (a + b))) return solution;
     }
-    low = high;
-    residual_low = residual_high;
+    high = low;
+    residual_high = residual_low;
   }
   throw std::runtime_error(
-      "elastica reference: no clamped equilibrium with a tip angle below 90 degrees");
+      "elastica reference: no monotone clamped equilibrium with a tip angle below 90 degrees (" +
+      std::to_string(rejected) + " non-monotone ones found)");
 }
 
 }  // namespace cosim::vegetation

@@ -4,6 +4,8 @@
 // reference for the single-blade scene.
 #pragma once
 
+#include <vector>
+
 namespace cosim::vegetation {
 
 struct ElasticaProblem {
@@ -19,13 +21,28 @@ struct ElasticaProblem {
   int steps = 4000;    // integration steps along the plant
 };
 
-struct ElasticaSolution {
-  double tip_streamwise = 0;  // tip displacement along the stream, m
-  double tip_height = 0;      // tip position along the unstressed direction, m
-  double tip_angle = 0;       // rad from the unstressed direction
+// One sample of the bent shape, at arc length s from the base.
+struct ElasticaPoint {
+  double s = 0;           // m
+  double angle = 0;       // rad from the unstressed direction, towards the stream
+  double streamwise = 0;  // position along the stream relative to the base, m
+  double height = 0;      // position along the unstressed direction relative to the base, m
 };
 
-// Throws std::runtime_error if no equilibrium is found in [0, pi/2).
+struct ElasticaSolution {
+  double tip_streamwise = 0;         // tip position along the stream relative to the base, m
+  double tip_height = 0;             // tip position along the unstressed direction, m
+  double tip_angle = 0;              // rad from the unstressed direction
+  std::vector<ElasticaPoint> shape;  // steps + 1 samples, base (s = 0) first
+};
+
+// The physical equilibrium: the shape whose angle grows monotonically from the base to the tip.
+// Above Cauchy numbers of about 100 the shooting problem has further clamped solutions whose
+// angle swings back and forth along the plant (S-shapes, loops against the stream); they are
+// skipped. Throws std::runtime_error if no monotone equilibrium has a tip angle in [0, pi/2).
 ElasticaSolution solve_elastica(const ElasticaProblem& problem);
+
+// True if the angle of `shape` never falls back by more than `tolerance` rad from base to tip.
+bool is_monotone(const std::vector<ElasticaPoint>& shape, double tolerance = 1e-9);
 
 }  // namespace cosim::vegetation

@@ -88,8 +88,8 @@ void report_metrics(const vegetation::VegetationConfig& config, const vegetation
   const int probe = config.elastica_reference ? config.elastica_reference->plant : 0;
   const auto& spec = field.specs()[probe];
   if (!config.elastica_reference) {
-    report.value("tip_streamwise_displacement",
-                 tip_streamwise.empty() ? 0.0 : tip_streamwise.back(), "m");
+    report.value("tip_streamwise_position", tip_streamwise.empty() ? 0.0 : tip_streamwise.back(),
+                 "m");
     report.value("tip_height", tip_height.empty() ? spec.length : tip_height.back(), "m");
     return;
   }
@@ -109,8 +109,9 @@ void report_metrics(const vegetation::VegetationConfig& config, const vegetation
   problem.gravity = -parameters.gravity.dot(up);
   const auto solution = vegetation::solve_elastica(problem);
   const double from = field.time() - reference.average_over;
-  const std::string source = "steady elastica with normal drag and buoyancy (shooting, 4000 steps)";
-  report.compare("tip_streamwise_displacement", mean_after(times, tip_streamwise, from),
+  const std::string source =
+      "steady elastica with normal drag and buoyancy (monotone equilibrium, shooting, 4000 steps)";
+  report.compare("tip_streamwise_position", mean_after(times, tip_streamwise, from),
                  solution.tip_streamwise, "m", source);
   report.compare("tip_height", mean_after(times, tip_height, from), solution.tip_height, "m",
                  source);
@@ -121,10 +122,13 @@ void report_metrics(const vegetation::VegetationConfig& config, const vegetation
 int main(int argc, char** argv) {
   return coupler::run_process(argc, argv, "vegetation_beam", [](coupler::ProcessContext& context) {
     auto section = context.section();
-    const vegetation::VegetationConfig config =
-        vegetation::parse_config(section, context.scene);
+    const vegetation::VegetationConfig config = vegetation::parse_config(section, context.scene);
     vegetation::PlantField field(config.plants, config.parameters);
     context.declare_frame(3, 0.0, config.parameters.gravity);
+    // Beam checks act before window 0: point loads, the static start, the pluck.
+    const vegetation::StartReport start = vegetation::prepare_start(field, config.checks);
+    const auto modes = vegetation::modal_frequencies(field, config.checks.modes);
+    if (!modes.empty()) vegetation::write_modes(context.output_dir() / "modes.csv", modes);
     auto& participant = *context.participant;
     const auto node_count = static_cast<std::size_t>(field.node_count());
     coupler::SolidLink link(participant, context.scene, node_count);
@@ -188,7 +192,7 @@ int main(int argc, char** argv) {
     std::vector<double> water(node_count, 1.0);
     double next_output = 0.0;
     int64_t node_substeps = 0;
-    int most_substeps = 0, most_newton_iterations = 0;
+    int most_substeps = 0, most_newton_iterations = 0, newton_restarts = 0, cutbacks = 0;
     // Impulse the fluid gave the plants; the last window's is handed over after the run ends.
     Eigen::Vector3d drag_impulse = Eigen::Vector3d::Zero(),
                     last_drag_impulse = Eigen::Vector3d::Zero();
@@ -198,10 +202,15 @@ int main(int argc, char** argv) {
       if (window.finish) {
         if (writer.frame_count() == 0 || next_output <= field.time())
           writer.write_frame(frame_of(field));
-        writer.write_series("tip_streamwise_displacement", times, tip_streamwise);
+        writer.write_series("tip_streamwise_position", times, tip_streamwise);
         writer.write_series("tip_height", times, tip_height);
         coupler::MetricsReport report;
         report_metrics(config, field, times, tip_streamwise, tip_height, report);
+        if (!modes.empty()) {  // of the probe plant, about its start shape
+          for (std::size_t mode = 0; mode < modes[probe].size(); ++mode)
+            report.value("mode_" + std::to_string(mode + 1) + "_frequency", modes[probe][mode],
+                         "Hz");
+        }
         if (config.canopy) {
           tips->flush();
           tip_heights->flush();
@@ -222,6 +231,9 @@ int main(int argc, char** argv) {
         report.info()["most_substeps_in_a_window"] = most_substeps;
         report.info()["stable_substep"] = field.stable_substep();
         report.info()["most_newton_iterations"] = most_newton_iterations;
+        report.info()["newton_restarts"] = newton_restarts;
+        report.info()["substep_cutbacks"] = cutbacks;
+        report.info()["static_solve_iterations"] = start.static_iterations;
         report.info()["kinetic_energy"] = field.kinetic_energy();
         report.info()["drag_impulse"] = {drag_impulse.x(), drag_impulse.y(), drag_impulse.z()};
         report.info()["last_window_drag_impulse"] = {last_drag_impulse.x(), last_drag_impulse.y(),
@@ -249,6 +261,8 @@ int main(int argc, char** argv) {
       node_substeps += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count);
       most_substeps = std::max(most_substeps, step.substeps);
       most_newton_iterations = std::max(most_newton_iterations, step.max_newton_iterations);
+      newton_restarts += step.newton_restarts;
+      cutbacks += step.cutbacks;
       last_drag_impulse.setZero();
       for (const auto& drag : field.window_mean_drag()) last_drag_impulse += drag * window.dt;
       drag_impulse += last_drag_impulse;

@@ -9,7 +9,8 @@ using scenario::Range;
 namespace {
 
 // One entry of `plants`: a single plant, or a row of `count` equal plants `spacing` apart.
-void parse_plant_group(scenario::Section& group, std::vector<PlantSpec>& plants) {
+void parse_plant_group(scenario::Section& group, const BeamParameters& parameters,
+                       std::vector<PlantSpec>& plants, BeamChecks& checks) {
   PlantSpec spec;
   spec.base = group.vector3("base");
   // World frame (docs/architecture.md): z is up, so plants stand along +z unless told otherwise.
@@ -32,6 +33,7 @@ void parse_plant_group(scenario::Section& group, std::vector<PlantSpec>& plants)
   if (count > 1 && spacing.norm() == 0.0) {
     group.fail("spacing", "a row of several plants needs a non-zero spacing");
   }
+  parse_plant_checks(group, spec, parameters, static_cast<int>(plants.size()), count, checks);
   for (int i = 0; i < count; ++i) {
     PlantSpec plant = spec;
     plant.base = spec.base + i * spacing;
@@ -66,9 +68,18 @@ VegetationConfig parse_config(scenario::Section& section, const scenario::Scene&
       section.number("safety_factor", parameters.safety_factor, Range{0.0, 1000.0, true});
   parameters.max_substeps =
       section.integer("max_substeps", parameters.max_substeps, Range::between(1, 100000000));
+  // Newton of each sub-step (PlantField::advance), per attempt. The tolerance is on the largest
+  // position correction in link lengths: looser than 1e-3 of a link per sub-step it is no longer
+  // small against the shapes it should resolve; the default 1e-10 is near round-off.
+  parameters.newton_tolerance =
+      section.number("newton_tolerance", parameters.newton_tolerance, Range{0.0, 1e-3, true});
+  parameters.max_newton_iterations = section.integer(
+      "max_newton_iterations", parameters.max_newton_iterations, Range::between(1, 1000));
 
-  for (auto& group : section.list("plants")) parse_plant_group(group, config.plants);
+  for (auto& group : section.list("plants"))
+    parse_plant_group(group, parameters, config.plants, config.checks);
   if (config.plants.empty()) section.fail("plants", "needs at least one plant");
+  parse_section_checks(section, config.plants, config.checks);
 
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());

@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "beam_checks.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
@@ -35,6 +36,7 @@ struct VegetationConfig {
   double output_interval = 0.0;
   std::optional<ElasticaReference> elastica_reference;
   std::optional<CanopySettings> canopy;
+  BeamChecks checks;  // point loads, plucks, static start, modal output
 };
 
 // `output_interval` is the scene's default for the section's own `output_interval`.

@@ -25,13 +25,16 @@ void BandedMatrix::add_block(int row_node, int col_node, const Eigen::Matrix3d& 
   }
 }
 
-bool BandedMatrix::factorize() {
+bool BandedMatrix::factorize(int* failed_row) {
   const int n = size_, w = half_bandwidth_;
   // Gaussian elimination restricted to the band (no fill-in outside it without pivoting); the
   // multipliers are kept below the diagonal.
   for (int k = 0; k < n; ++k) {
     const double pivot = at(k, k);
-    if (pivot == 0.0 || !std::isfinite(pivot)) return false;
+    if (pivot == 0.0 || !std::isfinite(pivot)) {
+      if (failed_row != nullptr) *failed_row = k;
+      return false;
+    }
     const int last = std::min(n - 1, k + w);
     for (int i = k + 1; i <= last; ++i) {
       const double factor = at(i, k) / pivot;

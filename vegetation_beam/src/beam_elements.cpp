@@ -92,16 +92,25 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
 }
 
 NodeDrag node_drag(const Eigen::Vector3d& tangent, const Eigen::Vector3d& ambient,
-                   const Eigen::Vector3d& velocity, double factor) {
+                   const Eigen::Vector3d& velocity, double factor, bool with_tangent_stiffness) {
   NodeDrag out;
   const Eigen::Vector3d relative = ambient - velocity;
-  const Eigen::Vector3d normal = relative - relative.dot(tangent) * tangent;
+  const double along = relative.dot(tangent);
+  const Eigen::Vector3d normal = relative - along * tangent;
   const double speed = normal.norm();
   out.force = factor * speed * normal;
+  out.tangent_stiffness.setZero();
   if (speed > 0) {
     const Eigen::Vector3d direction = normal / speed;
     const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - tangent * tangent.transpose();
     out.damping = factor * speed * (across + direction * direction.transpose());
+    if (with_tangent_stiffness) {
+      // u_n = r - (r.t) t: d u_n / d t = -((r.t) I + t r^T), d F / d u_n = f |u_n| (I + n n^T).
+      const Eigen::Matrix3d by_normal =
+          factor * speed * (Eigen::Matrix3d::Identity() + direction * direction.transpose());
+      out.tangent_stiffness =
+          by_normal * (along * Eigen::Matrix3d::Identity() + tangent * relative.transpose());
+    }
   } else {
     out.damping.setZero();
   }

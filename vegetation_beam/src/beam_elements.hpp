@@ -36,9 +36,11 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
 // (seed eq. 16 with |u_n| u_n): factor = 0.5 rho C_D b ds.
 struct NodeDrag {
   Eigen::Vector3d force;
-  Eigen::Matrix3d damping;  // minus d force / d node velocity
+  Eigen::Matrix3d damping;            // minus d force / d node velocity
+  Eigen::Matrix3d tangent_stiffness;  // minus d force / d tangent, when asked (else zero)
 };
 NodeDrag node_drag(const Eigen::Vector3d& tangent, const Eigen::Vector3d& ambient,
-                   const Eigen::Vector3d& velocity, double factor);
+                   const Eigen::Vector3d& velocity, double factor,
+                   bool with_tangent_stiffness = false);
 
 }  // namespace cosim::vegetation

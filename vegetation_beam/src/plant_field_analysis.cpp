@@ -1,9 +1,13 @@
 // Plant-to-plant contact, energies, static solve and linear natural frequencies.
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
@@ -202,6 +206,11 @@ StaticReport PlantField::solve_static(double tolerance, int max_iterations) {
   const bool contact = parameters_.contact && plant_count() > 1;
   BandedMatrix jacobian;
   std::vector<char> converged(plants_.size(), 0);
+  std::vector<double> last_correction(plants_.size(), 0.0);
+  const auto fail = [&](int plant, int node, const std::string& what) {
+    throw StabilityError("vegetation_beam: plant " + std::to_string(plant) + " node " +
+                         std::to_string(node) + ": static solve: " + what);
+  };
   for (report.iterations = 1; report.iterations <= max_iterations; ++report.iterations) {
     if (contact) {
       update_contact_candidates();
@@ -214,21 +223,39 @@ StaticReport PlantField::solve_static(double tolerance, int max_iterations) {
       jacobian.resize(3 * plant.links, 8);
       compute_forces(p, positions_, still, still, contact, forces_, drag_, &jacobian, 1.0, 0.0);
       for (int i = 1; i <= plant.links; ++i) residual_[plant.first + i] = -forces_[plant.first + i];
-      const double correction = apply_newton_correction(p, jacobian, residual_, true);
-      report.max_correction = std::max(report.max_correction, correction * plant.link_length);
-      converged[p] = correction <= tolerance;
+      const Correction correction = apply_newton_correction(p, jacobian, residual_, true);
+      if (correction.singular)
+        fail(p, correction.node,
+             "singular stiffness (a load that buckles the plant, or a plant with no bending "
+             "stiffness)");
+      if (!std::isfinite(correction.largest))
+        fail(p, correction.node, "Newton correction is not finite");
+      last_correction[p] = correction.largest;
+      report.max_correction =
+          std::max(report.max_correction, correction.largest * plant.link_length);
+      converged[p] = correction.largest <= tolerance;
       all_converged = all_converged && converged[p];
     }
     if (all_converged) break;
   }
-  if (report.iterations > max_iterations)
-    throw StabilityError("vegetation_beam: static solve did not converge in " +
-                         std::to_string(max_iterations) + " Newton iterations");
+  if (report.iterations > max_iterations) {
+    NewtonOutcome worst;
+    locate_largest_residual(converged, worst);
+    std::ostringstream out;
+    out.precision(3);
+    out << "did not converge in " << max_iterations << " Newton iterations: residual "
+        << worst.residual << " N is largest here, last correction " << last_correction[worst.plant]
+        << " link lengths against " << tolerance
+        << " (loads beyond a snap-through or buckling limit have no nearby equilibrium; start "
+           "from a shape closer to it or lower the loads)";
+    fail(worst.plant, worst.node, out.str());
+  }
   accelerations_valid_ = false;
   return report;
 }
 
-std::vector<double> PlantField::linear_natural_frequencies(int plant_index, int count) const {
+void PlantField::linear_problem(int plant_index, Eigen::MatrixXd& stiffness_matrix,
+                                Eigen::MatrixXd& mass) const {
   const Plant& plant = plants_.at(plant_index);
   const int dofs = 3 * plant.links;
   BandedMatrix stiffness;
@@ -237,19 +264,78 @@ std::vector<double> PlantField::linear_natural_frequencies(int plant_index, int 
   const std::vector<Eigen::Vector3d> still(positions_.size(), Eigen::Vector3d::Zero());
   compute_forces(plant_index, positions_, still, still, false, force, drag, &stiffness, 1.0, 0.0);
   const Eigen::MatrixXd k = stiffness.to_dense();
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(dofs, dofs);
+  stiffness_matrix = 0.5 * (k + k.transpose());
+  mass = Eigen::MatrixXd::Zero(dofs, dofs);
   for (int i = 1; i <= plant.links; ++i)
-    for (int d = 0; d < 3; ++d) m(3 * (i - 1) + d, 3 * (i - 1) + d) = node_mass_[plant.first + i];
-  const Eigen::MatrixXd symmetric = 0.5 * (k + k.transpose());
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(symmetric, m,
-                                                                   Eigen::EigenvaluesOnly);
+    for (int d = 0; d < 3; ++d)
+      mass(3 * (i - 1) + d, 3 * (i - 1) + d) = node_mass_[plant.first + i];
+}
+
+std::vector<double> PlantField::linear_natural_frequencies(int plant_index, int count) const {
+  Eigen::MatrixXd k, m;
+  linear_problem(plant_index, k, m);
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(k, m, Eigen::EigenvaluesOnly);
   std::vector<double> frequencies;
-  for (int i = 0; i < dofs && static_cast<int>(frequencies.size()) < count; ++i) {
+  for (int i = 0; i < k.rows() && static_cast<int>(frequencies.size()) < count; ++i) {
     const double f = std::sqrt(std::max(0.0, solver.eigenvalues()(i))) / (2 * std::numbers::pi);
     if (!frequencies.empty() && std::abs(f - frequencies.back()) <= 1e-6 * f) continue;
     frequencies.push_back(f);
   }
   return frequencies;
+}
+
+std::vector<LinearMode> PlantField::linear_modes(int plant_index, int count) const {
+  Eigen::MatrixXd k, m;
+  linear_problem(plant_index, k, m);
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(k, m);
+  const Plant& plant = plants_[plant_index];
+  std::vector<LinearMode> modes;
+  for (int i = 0; i < k.rows() && static_cast<int>(modes.size()) < count; ++i) {
+    LinearMode mode;
+    mode.frequency = std::sqrt(std::max(0.0, solver.eigenvalues()(i))) / (2 * std::numbers::pi);
+    mode.shape.assign(plant.links + 1, Eigen::Vector3d::Zero());
+    for (int node = 1; node <= plant.links; ++node)
+      mode.shape[node] = solver.eigenvectors().col(i).segment<3>(3 * (node - 1));
+    modes.push_back(std::move(mode));
+  }
+  return modes;
+}
+
+Eigen::Vector3d PlantField::set_mode_velocity(int plant_index, int mode,
+                                              const Eigen::Vector3d& tip_velocity) {
+  const Plant& plant = plants_.at(plant_index);
+  if (mode < 1) throw std::invalid_argument("vegetation_beam: mode numbers start at 1");
+  // Enough modes for `mode` distinct frequencies, each possibly a degenerate pair.
+  const std::vector<LinearMode> modes =
+      linear_modes(plant_index, std::min(3 * plant.links, 2 * mode + 1));
+  std::vector<int> group;  // the modes sharing the mode-th distinct frequency
+  int distinct = 0;
+  double current = -1;
+  for (int i = 0; i < static_cast<int>(modes.size()); ++i) {
+    const double f = modes[i].frequency;
+    if (current < 0 || std::abs(f - current) > 1e-6 * f) {
+      ++distinct;
+      current = f;
+    }
+    if (distinct == mode) group.push_back(i);
+    if (distinct > mode) break;
+  }
+  if (group.empty())
+    throw std::invalid_argument("vegetation_beam: plant " + std::to_string(plant_index) +
+                                " has only " + std::to_string(distinct) + " distinct modes");
+  // Least squares for the tip: tip_shapes * c = tip_velocity.
+  Eigen::MatrixXd tip_shapes(3, static_cast<int>(group.size()));
+  for (int j = 0; j < static_cast<int>(group.size()); ++j)
+    tip_shapes.col(j) = modes[group[j]].shape[plant.links];
+  const Eigen::VectorXd c = tip_shapes.colPivHouseholderQr().solve(tip_velocity);
+  for (int node = 0; node <= plant.links; ++node) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    for (int j = 0; j < static_cast<int>(group.size()); ++j)
+      v += c(j) * modes[group[j]].shape[node];
+    velocities_[plant.first + node] = v;
+  }
+  accelerations_valid_ = false;
+  return tip_shapes * c;
 }
 
 }  // namespace cosim::vegetation

@@ -22,8 +22,9 @@ class BandedMatrix {
   void add_block(int row_node, int col_node, const Eigen::Matrix3d& block, double weight);
   void add_diagonal(int row, double value) { at(row, row) += value; }
 
-  // LU factorisation in place; false on a zero or non-finite pivot.
-  bool factorize();
+  // LU factorisation in place; false on a zero or non-finite pivot, whose row goes into
+  // `failed_row` when given.
+  bool factorize(int* failed_row = nullptr);
   // Solves with the factors of factorize(), overwriting rhs with the solution.
   void solve(std::vector<double>& rhs) const;
   bool solve_in_place(std::vector<double>& rhs) {

@@ -43,13 +43,21 @@ struct BeamParameters {
   double safety_factor = 0.5;          // multiplies the spring-mass step limit
   int max_substeps = 100000;           // per window; more throws StabilityError
   double newton_tolerance = 1e-10;     // on the largest position correction, in link lengths
-  int max_newton_iterations = 20;
+  int max_newton_iterations = 20;      // per attempt; a sub-step makes at most two (see advance)
 };
 
 struct WindowReport {
   int substeps = 0;
   double substep = 0;
-  int max_newton_iterations = 0;  // largest Newton iteration count of any sub-step
+  int max_newton_iterations = 0;  // largest Newton iteration count of any sub-step (both tries)
+  int newton_restarts = 0;        // times the robust Newton attempt took over in the window
+  int cutbacks = 0;               // sub-steps halved because both Newton attempts failed
+};
+
+// A linear vibration mode of one plant about its current shape.
+struct LinearMode {
+  double frequency = 0;                // Hz
+  std::vector<Eigen::Vector3d> shape;  // per node of the plant, base first (zero); x^T M x = 1
 };
 
 struct StaticReport {
@@ -85,7 +93,14 @@ class PlantField {
   int substeps_for(double window_dt) const;
 
   // Advances one coupling window. Ambient fluid velocity per node (all nodes) at the window's
-  // start and end, interpolated linearly across the sub-steps.
+  // start and end, interpolated linearly across the sub-steps. Each sub-step is solved by
+  // modified Newton from the constant-acceleration predictor (fast). If that does not converge
+  // within max_newton_iterations, the sub-step is solved again by the robust attempt: the
+  // constant-velocity predictor, the drag's tangent terms in the Jacobian, and the Jacobian
+  // refreshed whenever an iteration fails to quarter the correction (needed far above the
+  // spring-mass limit, e.g. after a load step at t = 0); the rest of the window starts with it.
+  // If both fail, the sub-step is halved (up to 6 times); then StabilityError names the plant
+  // and node with the largest residual and what to change.
   WindowReport advance(double window_dt, const std::vector<Eigen::Vector3d>& ambient_begin,
                        const std::vector<Eigen::Vector3d>& ambient_end);
   // Per node: force the fluid exerted on the plant (drag), averaged over the last window. The
@@ -102,7 +117,8 @@ class PlantField {
   void set_state(std::vector<Eigen::Vector3d> positions, std::vector<Eigen::Vector3d> velocities);
 
   // Static equilibrium of elastic, contact, gravity-buoyancy and external forces (no fluid) by
-  // Newton's method from the current shape; velocities are set to zero.
+  // Newton's method from the current shape; velocities are set to zero. Tolerance on the largest
+  // correction in link lengths; StabilityError names the node with the largest residual.
   StaticReport solve_static(double tolerance = 1e-12, int max_iterations = 100);
 
   double kinetic_energy() const;    // includes the added fluid mass (eq. 8)
@@ -113,6 +129,13 @@ class PlantField {
   // from K x = omega^2 M x (Eigen's generalized self-adjoint solver). The two bending planes of
   // a straight plant are degenerate and reported once.
   std::vector<double> linear_natural_frequencies(int plant, int count) const;
+  // The lowest `count` modes (degenerate pairs listed one by one), from the same problem.
+  std::vector<LinearMode> linear_modes(int plant, int count) const;
+  // Sets the plant's velocities to its linear mode `mode` (1-based, counted as in
+  // linear_natural_frequencies), combining a degenerate pair so that the tip velocity comes as
+  // close to `tip_velocity` (m/s) as the mode allows (least squares). Returns the tip velocity
+  // set; positions are kept.
+  Eigen::Vector3d set_mode_velocity(int plant, int mode, const Eigen::Vector3d& tip_velocity);
 
  private:
   // Per-plant constants derived from PlantSpec and BeamParameters (eq. 12-15).
@@ -131,9 +154,37 @@ class PlantField {
     double reach_limit = 0;     // nodes farther from the base have escaped
   };
 
+  // Outcome of one Newton attempt of a sub-step; on failure the plant and node (local index)
+  // with the largest residual |m a - F| (N), or where the correction or a pivot failed.
+  struct NewtonOutcome {
+    bool converged = false;
+    int iterations = 0;
+    std::string failure;  // what went wrong, empty if converged
+    int plant = 0, node = 0;
+    double residual = 0;    // N, at that node
+    double correction = 0;  // last largest correction of that plant, in link lengths
+  };
+  // Largest correction of one Newton update, in link lengths, and its node (local index); a
+  // non-finite correction gives an infinite `largest`, a failed pivot sets `singular`.
+  struct Correction {
+    double largest = 0;
+    int node = 1;
+    bool singular = false;
+  };
+
   std::pair<double, std::string> step_limit() const;  // stable step and what limits it
   void initialise_accelerations(const std::vector<Eigen::Vector3d>& ambient);
-  int substep(double dt, const std::vector<Eigen::Vector3d>& ambient);
+  // One implicit Newmark sub-step of length dt from t0 with the ambient flow at its start and
+  // end (halves itself when both Newton attempts fail); adds its drag impulse to `impulse`.
+  void substep(double t0, double dt, const std::vector<Eigen::Vector3d>& ambient_start,
+               const std::vector<Eigen::Vector3d>& ambient_end, int depth,
+               std::vector<Eigen::Vector3d>& impulse, WindowReport& report);
+  // One Newton attempt from the state in previous_*: constant-acceleration predictor with the
+  // Jacobian of the first iteration kept (fast), or constant-velocity predictor with the
+  // Jacobian refreshed when the correction falls by less than a factor 4 (robust).
+  NewtonOutcome newton_attempt(double dt, const std::vector<Eigen::Vector3d>& ambient, bool robust);
+  // Plant and node with the largest residual among the plants not `converged`.
+  void locate_largest_residual(const std::vector<char>& converged, NewtonOutcome& outcome) const;
   void check_state(const std::vector<Eigen::Vector3d>& ambient) const;
   void update_contact_candidates();
   void compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
@@ -143,16 +194,20 @@ class PlantField {
   void refresh_contact_forces(int plant, double dt);
   // Sum of forces on the plant's nodes into `force` (base entry unused) and the drag part into
   // `drag` (base included). With a Jacobian: adds stiffness_weight * K + damping_weight * C
-  // over the free nodes (local node i-1 for global node first+i).
+  // over the free nodes (local node i-1 for global node first+i); drag_stiffness adds the
+  // drag's dependence on the node positions through the tangent to K.
   void compute_forces(int plant, const std::vector<Eigen::Vector3d>& x,
                       const std::vector<Eigen::Vector3d>& v,
                       const std::vector<Eigen::Vector3d>& ambient, bool include_contact,
                       std::vector<Eigen::Vector3d>& force, std::vector<Eigen::Vector3d>& drag,
-                      BandedMatrix* jacobian, double stiffness_weight, double damping_weight) const;
+                      BandedMatrix* jacobian, double stiffness_weight, double damping_weight,
+                      bool drag_stiffness = false) const;
   // Solves jacobian * correction = -residual for one plant (factorising first if asked) and
-  // applies it; returns the largest correction in link lengths.
-  double apply_newton_correction(int plant, BandedMatrix& jacobian,
-                                 const std::vector<Eigen::Vector3d>& residual, bool factorize);
+  // applies it (not when the factorisation fails).
+  Correction apply_newton_correction(int plant, BandedMatrix& jacobian,
+                                     const std::vector<Eigen::Vector3d>& residual, bool factorize);
+  // The symmetric stiffness and the lumped mass of one plant about its current shape.
+  void linear_problem(int plant, Eigen::MatrixXd& stiffness, Eigen::MatrixXd& mass) const;
 
   std::vector<PlantSpec> specs_;
   BeamParameters parameters_;
@@ -167,6 +222,8 @@ class PlantField {
   std::vector<Eigen::Vector3d> window_mean_drag_;
   // Scratch of the sub-step (kept to avoid reallocation).
   std::vector<Eigen::Vector3d> previous_positions_, previous_velocities_, previous_accelerations_;
+  std::vector<Eigen::Vector3d> previous_drag_;
+  bool robust_first_ = false;  // the fast Newton attempt failed earlier in this window
   std::vector<Eigen::Vector3d> forces_, drag_, residual_;
   std::vector<double> correction_;
   std::vector<BandedMatrix> jacobians_;  // per plant, factorised at a sub-step's first iteration
