@@ -13,6 +13,7 @@
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/coupler/solver_loop.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/vegetation_beam/canopy_metrics.hpp"
 #include "elastica.hpp"
@@ -117,164 +118,180 @@ void report_metrics(const vegetation::VegetationConfig& config, const vegetation
                  source);
 }
 
+// The plant library as a participant: sub-cycles through each window with the ambient flow,
+// returns positions, velocities and the window-mean drag, and follows the tips.
+class VegetationProcess final : public coupler::Solver {
+ public:
+  explicit VegetationProcess(coupler::ProcessContext& context)
+      : config_(parse(context)),
+        field_(config_.plants, config_.parameters),
+        start_(vegetation::prepare_start(field_, config_.checks)),  // loads, static start, pluck
+        node_count_(static_cast<std::size_t>(field_.node_count())),
+        link_(*context.participant, context.scene, node_count_),
+        writer_(context.output_dir() / "plants", "vegetation_beam"),
+        probe_(config_.elastica_reference ? config_.elastica_reference->plant : 0),
+        amplitude_(config_.canopy ? field_.plant_count() : 0),
+        water_(node_count_, 1.0) {
+    context.declare_frame(3, 0.0, config_.parameters.gravity);
+    modes_ = vegetation::modal_frequencies(field_, config_.checks.modes);
+    if (!modes_.empty()) vegetation::write_modes(context.output_dir() / "modes.csv", modes_);
+    spdlog::info("{} plants, {} nodes, stable sub-step {:.3g} s", field_.plant_count(), node_count_,
+                 field_.stable_substep());
+    up_ = field_.specs()[probe_].direction.normalized();
+    if (config_.elastica_reference) {
+      const Eigen::Vector3d& v = config_.elastica_reference->velocity;
+      const Eigen::Vector3d across = v - v.dot(up_) * up_;
+      if (across.norm() > 0) streamwise_ = across.normalized();
+    }
+    if (config_.canopy) {
+      // Seed 000 section 4: density change psi in every frame, honami amplitude of every tip.
+      initial_density_ =
+          vegetation::vegetation_number_density(field_.positions(), config_.canopy->psi_radius);
+      tips_.emplace(context.output_dir() / "tips.csv", field_.plant_count());
+      tip_heights_.emplace(context.output_dir() / "tip_heights.csv", field_.plant_count());
+    }
+  }
+
+  double output_interval() const { return config_.output_interval; }
+  double output_time() const override { return field_.time(); }
+  void write_output() override {
+    writer_.write_frame(config_.canopy
+                            ? make_frame(field_, &initial_density_, config_.canopy->psi_radius)
+                            : make_frame(field_));
+  }
+
+  coupler::WindowResult initial_window(const coupler::Window&) override {
+    record_tip();
+    write_tips();
+    const std::vector<Eigen::Vector3d> no_drag(node_count_, Eigen::Vector3d::Zero());
+    link_.publish_state(field_.positions(), field_.velocities(), no_drag);
+    return {};
+  }
+
+  coupler::WindowResult advance(const coupler::Window& window) override {
+    const auto [begin, end] = link_.ambient(window);
+    // Emergent parts of a plant (water fraction 0) take no drag and no buoyancy.
+    for (std::size_t k = 0; k < node_count_; ++k) {
+      water_[k] = 0.5 * (begin.water_fraction[k] + end.water_fraction[k]);
+    }
+    field_.set_water_fraction(water_);
+    const auto step = field_.advance(window.dt, begin.velocity, end.velocity);
+    node_substeps_ += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count_);
+    most_substeps_ = std::max(most_substeps_, step.substeps);
+    most_newton_iterations_ = std::max(most_newton_iterations_, step.max_newton_iterations);
+    newton_restarts_ += step.newton_restarts;
+    cutbacks_ += step.cutbacks;
+    last_drag_impulse_.setZero();
+    for (const auto& drag : field_.window_mean_drag()) last_drag_impulse_ += drag * window.dt;
+    drag_impulse_ += last_drag_impulse_;
+    record_tip();
+    observe_canopy();
+    write_tips();
+    link_.publish_state(field_.positions(), field_.velocities(), field_.window_mean_drag());
+    return {step.substeps, 0.0};
+  }
+
+  void finish(coupler::MetricsReport& report) override {
+    writer_.write_series("tip_streamwise_position", times_, tip_streamwise_);
+    writer_.write_series("tip_height", times_, tip_height_);
+    report_metrics(config_, field_, times_, tip_streamwise_, tip_height_, report);
+    if (!modes_.empty()) {  // of the probe plant, about its start shape
+      for (std::size_t mode = 0; mode < modes_[probe_].size(); ++mode)
+        report.value("mode_" + std::to_string(mode + 1) + "_frequency", modes_[probe_][mode], "Hz");
+    }
+    if (config_.canopy) report_canopy(report);
+    auto& info = report.info();
+    info["plants"] = field_.plant_count();
+    info["nodes"] = node_count_;
+    info["node_substeps"] = node_substeps_;
+    info["most_substeps_in_a_window"] = most_substeps_;
+    info["stable_substep"] = field_.stable_substep();
+    info["most_newton_iterations"] = most_newton_iterations_;
+    info["newton_restarts"] = newton_restarts_;
+    info["substep_cutbacks"] = cutbacks_;
+    info["static_solve_iterations"] = start_.static_iterations;
+    info["kinetic_energy"] = field_.kinetic_energy();
+    // Impulse the fluid gave the plants; the last window's reaches the fluid after the run.
+    info["drag_impulse"] = {drag_impulse_.x(), drag_impulse_.y(), drag_impulse_.z()};
+    info["last_window_drag_impulse"] = {last_drag_impulse_.x(), last_drag_impulse_.y(),
+                                        last_drag_impulse_.z()};
+    info["elastic_energy"] = field_.elastic_energy();
+  }
+
+ private:
+  static vegetation::VegetationConfig parse(coupler::ProcessContext& context) {
+    auto section = context.section();
+    return vegetation::parse_config(section, context.scene);
+  }
+
+  void record_tip() {
+    const auto [first, last] = field_.node_range(probe_);
+    const Eigen::Vector3d tip = field_.positions()[last - 1] - field_.positions()[first];
+    times_.push_back(field_.time());
+    tip_streamwise_.push_back(tip.dot(streamwise_));
+    tip_height_.push_back(tip.dot(up_));
+  }
+
+  void write_tips() {
+    if (!config_.canopy || field_.time() < next_tip_ - 1e-12 * std::max(1.0, next_tip_)) return;
+    const Eigen::Vector3d& streamwise = config_.canopy->streamwise;
+    tips_->write(field_, [&](int plant) { return field_.tip_displacement(plant).dot(streamwise); });
+    tip_heights_->write(field_, [&](int plant) {
+      return field_.tip_displacement(plant).dot(field_.specs()[plant].direction);
+    });
+    // Multiples of the interval: no drift, and one row per window if windows are longer.
+    const double interval = config_.canopy->tip_interval;
+    next_tip_ = interval * (std::floor(field_.time() / interval + 1e-9) + 1.0);
+  }
+
+  void observe_canopy() {
+    if (!config_.canopy || field_.time() < config_.canopy->amplitude_from) return;
+    for (int plant = 0; plant < field_.plant_count(); ++plant) {
+      amplitude_.observe(plant, field_.tip_displacement(plant).dot(config_.canopy->streamwise));
+    }
+  }
+
+  void report_canopy(coupler::MetricsReport& report) {
+    tips_->flush();
+    tip_heights_->flush();
+    report.value("mean_tip_amplitude", amplitude_.mean_amplitude(), "m");
+    double displacement = 0.0;
+    for (int plant = 0; plant < field_.plant_count(); ++plant)
+      displacement += field_.tip_displacement(plant).dot(config_.canopy->streamwise);
+    report.value("mean_tip_displacement", displacement / field_.plant_count(), "m");
+    const auto psi = vegetation::vegetation_density_change(
+        vegetation::vegetation_number_density(field_.positions(), config_.canopy->psi_radius),
+        initial_density_);
+    report.value("psi_min", *std::min_element(psi.begin(), psi.end()), "");
+    report.value("psi_max", *std::max_element(psi.begin(), psi.end()), "");
+  }
+
+  const vegetation::VegetationConfig config_;
+  vegetation::PlantField field_;
+  const vegetation::StartReport start_;
+  std::vector<std::vector<double>> modes_;
+  const std::size_t node_count_;
+  coupler::SolidLink link_;
+  output::PointSeriesWriter writer_;
+  const int probe_;
+  Eigen::Vector3d up_ = Eigen::Vector3d::UnitZ(), streamwise_ = Eigen::Vector3d::UnitX();
+  std::vector<double> times_, tip_streamwise_, tip_height_;
+  std::vector<double> initial_density_;
+  vegetation::TipAmplitude amplitude_;
+  std::optional<TipSeries> tips_, tip_heights_;
+  double next_tip_ = 0.0;
+  std::vector<double> water_;
+  int64_t node_substeps_ = 0;
+  int most_substeps_ = 0, most_newton_iterations_ = 0, newton_restarts_ = 0, cutbacks_ = 0;
+  Eigen::Vector3d drag_impulse_ = Eigen::Vector3d::Zero(),
+                  last_drag_impulse_ = Eigen::Vector3d::Zero();
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return coupler::run_process(argc, argv, "vegetation_beam", [](coupler::ProcessContext& context) {
-    auto section = context.section();
-    const vegetation::VegetationConfig config = vegetation::parse_config(section, context.scene);
-    vegetation::PlantField field(config.plants, config.parameters);
-    context.declare_frame(3, 0.0, config.parameters.gravity);
-    // Beam checks act before window 0: point loads, the static start, the pluck.
-    const vegetation::StartReport start = vegetation::prepare_start(field, config.checks);
-    const auto modes = vegetation::modal_frequencies(field, config.checks.modes);
-    if (!modes.empty()) vegetation::write_modes(context.output_dir() / "modes.csv", modes);
-    auto& participant = *context.participant;
-    const auto node_count = static_cast<std::size_t>(field.node_count());
-    coupler::SolidLink link(participant, context.scene, node_count);
-    output::PointSeriesWriter writer(context.output_dir() / "plants", "vegetation_beam");
-    spdlog::info("{} plants, {} nodes, stable sub-step {:.3g} s", field.plant_count(), node_count,
-                 field.stable_substep());
-
-    const int probe = config.elastica_reference ? config.elastica_reference->plant : 0;
-    const Eigen::Vector3d up = field.specs()[probe].direction.normalized();
-    Eigen::Vector3d streamwise = Eigen::Vector3d::UnitX();
-    if (config.elastica_reference) {
-      const Eigen::Vector3d across =
-          config.elastica_reference->velocity - config.elastica_reference->velocity.dot(up) * up;
-      if (across.norm() > 0) streamwise = across.normalized();
-    }
-    std::vector<double> times, tip_streamwise, tip_height;
-    // Seed 000 section 4: density change psi in every frame, honami amplitude of every tip.
-    std::vector<double> initial_density;
-    vegetation::TipAmplitude amplitude(config.canopy ? field.plant_count() : 0);
-    if (config.canopy) {
-      initial_density =
-          vegetation::vegetation_number_density(field.positions(), config.canopy->psi_radius);
-    }
-    auto frame_of = [&](const vegetation::PlantField& plants) {
-      return config.canopy ? make_frame(plants, &initial_density, config.canopy->psi_radius)
-                           : make_frame(plants);
-    };
-    std::optional<TipSeries> tips, tip_heights;
-    double next_tip = 0.0;
-    auto write_tips = [&] {
-      if (!config.canopy || field.time() < next_tip - 1e-12 * std::max(1.0, next_tip)) return;
-      tips->write(field, [&](int plant) {
-        return field.tip_displacement(plant).dot(config.canopy->streamwise);
-      });
-      tip_heights->write(field, [&](int plant) {
-        return field.tip_displacement(plant).dot(field.specs()[plant].direction);
-      });
-      // Multiples of the interval: no drift, and one row per window if windows are longer.
-      const double interval = config.canopy->tip_interval;
-      next_tip = interval * (std::floor(field.time() / interval + 1e-9) + 1.0);
-    };
-    if (config.canopy) {
-      tips.emplace(context.output_dir() / "tips.csv", field.plant_count());
-      tip_heights.emplace(context.output_dir() / "tip_heights.csv", field.plant_count());
-    }
-    auto observe_canopy = [&] {
-      if (!config.canopy || field.time() < config.canopy->amplitude_from) return;
-      for (int plant = 0; plant < field.plant_count(); ++plant) {
-        amplitude.observe(plant, field.tip_displacement(plant).dot(config.canopy->streamwise));
-      }
-    };
-    auto record_tip = [&] {
-      const auto [first, last] = field.node_range(probe);
-      const Eigen::Vector3d tip = field.positions()[last - 1] - field.positions()[first];
-      times.push_back(field.time());
-      tip_streamwise.push_back(tip.dot(streamwise));
-      tip_height.push_back(tip.dot(up));
-    };
-
-    const std::vector<Eigen::Vector3d> no_drag(node_count, Eigen::Vector3d::Zero());
-    std::vector<double> water(node_count, 1.0);
-    double next_output = 0.0;
-    int64_t node_substeps = 0;
-    int most_substeps = 0, most_newton_iterations = 0, newton_restarts = 0, cutbacks = 0;
-    // Impulse the fluid gave the plants; the last window's is handed over after the run ends.
-    Eigen::Vector3d drag_impulse = Eigen::Vector3d::Zero(),
-                    last_drag_impulse = Eigen::Vector3d::Zero();
-    while (true) {
-      const coupler::Window window = participant.next_window();
-      context.maybe_inject_fault(window.index);
-      if (window.finish) {
-        if (writer.frame_count() == 0 || next_output <= field.time())
-          writer.write_frame(frame_of(field));
-        writer.write_series("tip_streamwise_position", times, tip_streamwise);
-        writer.write_series("tip_height", times, tip_height);
-        coupler::MetricsReport report;
-        report_metrics(config, field, times, tip_streamwise, tip_height, report);
-        if (!modes.empty()) {  // of the probe plant, about its start shape
-          for (std::size_t mode = 0; mode < modes[probe].size(); ++mode)
-            report.value("mode_" + std::to_string(mode + 1) + "_frequency", modes[probe][mode],
-                         "Hz");
-        }
-        if (config.canopy) {
-          tips->flush();
-          tip_heights->flush();
-          report.value("mean_tip_amplitude", amplitude.mean_amplitude(), "m");
-          double displacement = 0.0;
-          for (int plant = 0; plant < field.plant_count(); ++plant)
-            displacement += field.tip_displacement(plant).dot(config.canopy->streamwise);
-          report.value("mean_tip_displacement", displacement / field.plant_count(), "m");
-          const auto psi = vegetation::vegetation_density_change(
-              vegetation::vegetation_number_density(field.positions(), config.canopy->psi_radius),
-              initial_density);
-          report.value("psi_min", *std::min_element(psi.begin(), psi.end()), "");
-          report.value("psi_max", *std::max_element(psi.begin(), psi.end()), "");
-        }
-        report.info()["plants"] = field.plant_count();
-        report.info()["nodes"] = node_count;
-        report.info()["node_substeps"] = node_substeps;
-        report.info()["most_substeps_in_a_window"] = most_substeps;
-        report.info()["stable_substep"] = field.stable_substep();
-        report.info()["most_newton_iterations"] = most_newton_iterations;
-        report.info()["newton_restarts"] = newton_restarts;
-        report.info()["substep_cutbacks"] = cutbacks;
-        report.info()["static_solve_iterations"] = start.static_iterations;
-        report.info()["kinetic_energy"] = field.kinetic_energy();
-        report.info()["drag_impulse"] = {drag_impulse.x(), drag_impulse.y(), drag_impulse.z()};
-        report.info()["last_window_drag_impulse"] = {last_drag_impulse.x(), last_drag_impulse.y(),
-                                                     last_drag_impulse.z()};
-        report.info()["elastic_energy"] = field.elastic_energy();
-        participant.finished(report.dump());
-        return;
-      }
-      if (window.index == 0) {
-        record_tip();
-        write_tips();
-        writer.write_frame(frame_of(field));
-        next_output = config.output_interval;
-        link.publish_state(field.positions(), field.velocities(), no_drag);
-        participant.done(0);
-        continue;
-      }
-      const auto [begin, end] = link.ambient(window);
-      // Emergent parts of a plant (water fraction 0) take no drag and no buoyancy.
-      for (std::size_t k = 0; k < node_count; ++k) {
-        water[k] = 0.5 * (begin.water_fraction[k] + end.water_fraction[k]);
-      }
-      field.set_water_fraction(water);
-      const auto step = field.advance(window.dt, begin.velocity, end.velocity);
-      node_substeps += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count);
-      most_substeps = std::max(most_substeps, step.substeps);
-      most_newton_iterations = std::max(most_newton_iterations, step.max_newton_iterations);
-      newton_restarts += step.newton_restarts;
-      cutbacks += step.cutbacks;
-      last_drag_impulse.setZero();
-      for (const auto& drag : field.window_mean_drag()) last_drag_impulse += drag * window.dt;
-      drag_impulse += last_drag_impulse;
-      record_tip();
-      observe_canopy();
-      write_tips();
-      if (field.time() >= next_output - 1e-12 * std::max(1.0, next_output)) {
-        writer.write_frame(frame_of(field));
-        next_output += config.output_interval;
-      }
-      link.publish_state(field.positions(), field.velocities(), field.window_mean_drag());
-      participant.done(step.substeps);
-    }
+    VegetationProcess plants(context);
+    coupler::run_solver_loop(context, plants, plants.output_interval());
   });
 }
