@@ -20,6 +20,199 @@ Material parse_material(scenario::Section section, Material defaults) {
   return m;
 }
 
+// Fails for a key that only means something under another setting, instead of calling it
+// unknown.
+void forbid(scenario::Section& section, const std::string& key, const std::string& needs) {
+  if (section.has(key)) section.fail(key, "only used with " + needs);
+}
+
+// Drag law, pressure gradient, added mass and voidage correction (DemParameters, dem_world.hpp).
+// Seed 004's law keeps its buoyancy-only defaults; the Schiller-Naumann set defaults to the full
+// unresolved CFD-DEM force set.
+void parse_fluid_forces(scenario::Section& section, DemParameters& p) {
+  const std::string law = section.text("drag_law", "seed004", {"seed004", "schiller_naumann"});
+  const bool seed = law == "seed004";
+  p.drag_law = seed ? DragLaw::kSeed004 : DragLaw::kSchillerNaumann;
+  p.fluid_density = section.number("fluid_density", p.fluid_density, Range::non_negative());
+  if (seed) {
+    p.drag_coefficient_sphere =
+        section.number("drag_coefficient_sphere", p.drag_coefficient_sphere, Range::non_negative());
+    p.drag_coefficient_cylinder = section.number(
+        "drag_coefficient_cylinder", p.drag_coefficient_cylinder, Range::non_negative());
+    forbid(section, "fluid_viscosity", "drag_law: schiller_naumann");
+  } else {
+    forbid(section, "drag_coefficient_sphere", "drag_law: seed004");
+    forbid(section, "drag_coefficient_cylinder", "drag_law: seed004");
+    // Pa s; from superfluid helium to bitumen, so a unit slip (mPa s for Pa s) shows up.
+    p.fluid_viscosity =
+        section.number("fluid_viscosity", p.fluid_viscosity, Range{1e-7, 1e6, false});
+  }
+  p.voidage_correction = section.flag("voidage_correction", false);
+  if (p.voidage_correction) {
+    if (seed) section.fail("voidage_correction", "needs drag_law: schiller_naumann");
+    p.voidage_radius = section.number("voidage_radius", Range::positive());  // m
+  } else {
+    forbid(section, "voidage_radius", "voidage_correction: true");
+  }
+  p.fluid_acceleration_force = section.flag("fluid_acceleration_force", !seed);
+  p.added_mass = section.flag("added_mass", !seed);
+  // Added-mass coefficients: 0 (none) up to 5, beyond any rigid body's in unbounded fluid
+  // (a flat plate broadside, per its volume, excepted).
+  const Range coefficient = Range::between(0.0, 5.0);
+  if (p.added_mass) {
+    p.added_mass_sphere =
+        section.number("added_mass_coefficient", p.added_mass_sphere, coefficient);
+    p.added_mass_cylinder_normal = section.number("added_mass_coefficient_log_normal",
+                                                  p.added_mass_cylinder_normal, coefficient);
+    p.added_mass_cylinder_axial = section.number("added_mass_coefficient_log_axial",
+                                                 p.added_mass_cylinder_axial, coefficient);
+  } else {
+    for (const char* key : {"added_mass_coefficient", "added_mass_coefficient_log_normal",
+                            "added_mass_coefficient_log_axial"}) {
+      forbid(section, key, "added_mass: true");
+    }
+  }
+}
+
+// The seed 004 flume with its bed roughness and check dam.
+void parse_flume(scenario::Section& section, DebrisConfig& config) {
+  if (!section.has("flume")) {
+    for (const char* key : {"bed_roughness", "dam"}) forbid(section, key, "a flume");
+    return;
+  }
+  auto flume = section.child("flume");
+  FlumeSpec spec;
+  spec.length = flume.number("length", Range::positive());
+  spec.width = flume.number("width", Range::positive());
+  spec.wall_height = flume.number("wall_height", Range::positive());
+  spec.upstream_wall = flume.flag("upstream_wall", true);
+  config.flume = spec;
+  if (section.has("bed_roughness")) {
+    auto rough = section.child("bed_roughness");
+    RoughnessSettings r;
+    r.x0 = rough.number("x0", Range::non_negative());
+    r.x1 = rough.number("x1", Range::positive());
+    if (r.x1 <= r.x0) rough.fail("x1", "must exceed x0");
+    r.d_min = rough.number("d_min", Range::positive());
+    r.d_max = rough.number("d_max", Range::positive());
+    if (r.d_max < r.d_min) rough.fail("d_max", "must not be below d_min");
+    r.seed = static_cast<unsigned>(rough.integer("seed", 1, Range::non_negative()));
+    config.roughness = r;
+  }
+  if (section.has("dam")) {
+    auto dam = section.child("dam");
+    GridDamSpec dam_spec;
+    dam_spec.x = dam.number("x", Range::positive());
+    if (dam_spec.x >= spec.length) dam.fail("x", "the dam must stand inside the flume");
+    dam_spec.width = spec.width;
+    dam_spec.column_diameter =
+        dam.number("column_diameter", dam_spec.column_diameter, Range::positive());
+    dam_spec.horizontal_gap = dam.number("horizontal_gap", Range::positive());
+    dam_spec.vertical_gap = dam.number("vertical_gap", 0.0, Range::non_negative());
+    dam_spec.height = dam.number("height", spec.wall_height, Range::positive());
+    config.dam = dam_spec;
+  }
+}
+
+// The random packing of seed 004 section 4.1(2), and the gate that holds it while it settles.
+void parse_packing(scenario::Section& section, DebrisConfig& config) {
+  if (!section.has("packing")) {
+    forbid(section, "gate", "a packing");
+    return;
+  }
+  auto packing = section.child("packing");
+  PackingSpec spec;
+  spec.box_min = packing.vector3("box_min");
+  spec.box_max = packing.vector3("box_max");
+  if ((spec.box_max - spec.box_min).minCoeff() <= 0) {
+    packing.fail("box_max", "must exceed box_min in x, y and z");
+  }
+  for (auto& entry : packing.list("spheres")) {
+    SphereClass sphere_class{entry.number("diameter", Range::positive()),
+                             entry.integer("count", Range::between(0, 1e7))};
+    config.sphere_classes.push_back(sphere_class);
+    for (int i = 0; i < sphere_class.count; ++i) {
+      spec.sphere_diameters.push_back(sphere_class.diameter);
+    }
+  }
+  spec.log_count = packing.integer("log_count", 0, Range::between(0, 1e6));
+  spec.log_diameter = packing.number("log_diameter", 0.01, Range::positive());
+  spec.log_length = packing.number("log_length", 0.1, Range::positive());
+  spec.seed = static_cast<unsigned>(packing.integer("seed", 1, Range::non_negative()));
+  if (spec.sphere_diameters.empty() && spec.log_count == 0) {
+    packing.fail("spheres", "no debris to pack");
+  }
+  config.packing = spec;
+  if (!section.has("gate")) return;
+  auto gate = section.child("gate");
+  if (!config.flume) gate.fail("x", "the gate spans a flume: give one");
+  GateSettings settings;
+  settings.x = gate.number("x", Range::positive());
+  if (settings.x < spec.box_max.x()) {
+    gate.fail("x", "the gate must stand downstream of the packing box");
+  }
+  settings.settle_time = gate.number("settle_time", settings.settle_time, Range::non_negative());
+  config.gate = settings;
+}
+
+// A closed box of wall triangles, open at the top.
+void parse_box(scenario::Section& section, DebrisConfig& config) {
+  if (!section.has("box")) return;
+  auto box = section.child("box");
+  BoxSettings settings;
+  settings.min = box.vector3("min");
+  settings.max = box.vector3("max");
+  if ((settings.max - settings.min).minCoeff() <= 0) {
+    box.fail("max", "must exceed min in x, y and z");
+  }
+  config.box = settings;
+}
+
+void parse_elements(scenario::Section& section, DebrisConfig& config) {
+  if (!section.has("elements")) return;
+  for (auto& entry : section.list("elements")) {
+    ElementSettings e;
+    e.log = entry.choice("kind", {"sphere", "log"}) == "log";
+    e.center = entry.vector3("center");
+    e.diameter = entry.number("diameter", Range::positive());
+    if (e.log) {
+      e.length = entry.number("length", Range::positive());
+      e.axis = entry.vector3("axis");
+      if (!(e.axis.norm() > 0.0)) entry.fail("axis", "must not be the zero vector");
+      e.axis.normalize();
+    } else {
+      forbid(entry, "length", "kind: log");
+      forbid(entry, "axis", "kind: log");
+    }
+    e.material = e.log ? config.logs : config.debris;
+    e.material.density = entry.number("density", Range::positive());
+    e.velocity = entry.vector3("velocity", Eigen::Vector3d::Zero());
+    if (config.box && ((e.center.array() < config.box->min.array()).any() ||
+                       (e.center.array() > config.box->max.array()).any())) {
+      entry.fail("center", "lies outside the box");
+    }
+    config.elements.push_back(e);
+  }
+}
+
+// Elements that leave the structure by far are errors; debris that passes a flume's dam leaves
+// its end and falls freely, so the flume's domain reaches far downstream and down.
+void set_domain(DebrisConfig& config) {
+  DemParameters& p = config.parameters;
+  const double margin = 1.0;
+  if (config.flume) {
+    p.domain_min = Eigen::Vector3d(-margin, -margin, -100.0);
+    p.domain_max = Eigen::Vector3d(config.flume->length + 100.0, config.flume->width + margin,
+                                   config.flume->wall_height + 10 * margin);
+  }
+  if (config.box) {
+    const Eigen::Vector3d low = config.box->min - Eigen::Vector3d::Constant(margin);
+    const Eigen::Vector3d high = config.box->max + Eigen::Vector3d(margin, margin, 10 * margin);
+    p.domain_min = config.flume ? Eigen::Vector3d(p.domain_min.cwiseMin(low)) : low;
+    p.domain_max = config.flume ? Eigen::Vector3d(p.domain_max.cwiseMax(high)) : high;
+  }
+}
+
 }  // namespace
 
 DebrisConfig parse_config(scenario::Section& section, double scene_output_interval) {
@@ -28,11 +221,7 @@ DebrisConfig parse_config(scenario::Section& section, double scene_output_interv
   config.slope_degrees = section.number("slope_degrees", 0.0, Range::between(0.0, 60.0));
   const double g = section.number("gravity_magnitude", 9.81, Range::non_negative());
   p.gravity = slope_gravity(config.slope_degrees, g);
-  p.fluid_density = section.number("fluid_density", p.fluid_density, Range::non_negative());
-  p.drag_coefficient_sphere =
-      section.number("drag_coefficient_sphere", p.drag_coefficient_sphere, Range::non_negative());
-  p.drag_coefficient_cylinder = section.number("drag_coefficient_cylinder",
-                                               p.drag_coefficient_cylinder, Range::non_negative());
+  parse_fluid_forces(section, p);
   p.user_dt = section.number("substep", 1.0e-5, Range::non_negative());
   p.safety_factor = section.number("safety_factor", p.safety_factor, Range{0.0, 1.0, true});
   p.list_margin = section.number("list_margin", p.list_margin, Range::positive());
@@ -49,72 +238,14 @@ DebrisConfig parse_config(scenario::Section& section, double scene_output_interv
   config.logs = parse_material(materials.optional_child("logs"), log_defaults);
   config.structure = parse_material(materials.optional_child("structure"), debris_defaults);
 
-  auto flume = section.child("flume");
-  config.flume.length = flume.number("length", Range::positive());
-  config.flume.width = flume.number("width", Range::positive());
-  config.flume.wall_height = flume.number("wall_height", Range::positive());
-  config.flume.upstream_wall = flume.flag("upstream_wall", true);
-
-  if (section.has("bed_roughness")) {
-    auto rough = section.child("bed_roughness");
-    RoughnessSettings r;
-    r.x0 = rough.number("x0", Range::non_negative());
-    r.x1 = rough.number("x1", Range::positive());
-    if (r.x1 <= r.x0) rough.fail("x1", "must exceed x0");
-    r.d_min = rough.number("d_min", Range::positive());
-    r.d_max = rough.number("d_max", Range::positive());
-    if (r.d_max < r.d_min) rough.fail("d_max", "must not be below d_min");
-    r.seed = static_cast<unsigned>(rough.integer("seed", 1, Range::non_negative()));
-    config.roughness = r;
+  parse_flume(section, config);
+  parse_box(section, config);
+  parse_packing(section, config);
+  parse_elements(section, config);
+  if (!config.packing && config.elements.empty()) {
+    section.fail("elements", "nothing moves: give a packing or elements");
   }
-  if (section.has("dam")) {
-    auto dam = section.child("dam");
-    GridDamSpec spec;
-    spec.x = dam.number("x", Range::positive());
-    if (spec.x >= config.flume.length) dam.fail("x", "the dam must stand inside the flume");
-    spec.width = config.flume.width;
-    spec.column_diameter = dam.number("column_diameter", spec.column_diameter, Range::positive());
-    spec.horizontal_gap = dam.number("horizontal_gap", Range::positive());
-    spec.vertical_gap = dam.number("vertical_gap", 0.0, Range::non_negative());
-    spec.height = dam.number("height", config.flume.wall_height, Range::positive());
-    config.dam = spec;
-  }
-
-  auto packing = section.child("packing");
-  config.packing.box_min = packing.vector3("box_min");
-  config.packing.box_max = packing.vector3("box_max");
-  if ((config.packing.box_max - config.packing.box_min).minCoeff() <= 0) {
-    packing.fail("box_max", "must exceed box_min in x, y and z");
-  }
-  for (auto& entry : packing.list("spheres")) {
-    SphereClass sphere_class{entry.number("diameter", Range::positive()),
-                             entry.integer("count", Range::between(0, 1e7))};
-    config.sphere_classes.push_back(sphere_class);
-    for (int i = 0; i < sphere_class.count; ++i) {
-      config.packing.sphere_diameters.push_back(sphere_class.diameter);
-    }
-  }
-  config.packing.log_count = packing.integer("log_count", 0, Range::between(0, 1e6));
-  config.packing.log_diameter = packing.number("log_diameter", 0.01, Range::positive());
-  config.packing.log_length = packing.number("log_length", 0.1, Range::positive());
-  config.packing.seed = static_cast<unsigned>(packing.integer("seed", 1, Range::non_negative()));
-  if (config.packing.sphere_diameters.empty() && config.packing.log_count == 0) {
-    packing.fail("spheres", "no debris to pack");
-  }
-
-  auto gate = section.child("gate");
-  config.gate_x = gate.number("x", Range::positive());
-  if (config.gate_x < config.packing.box_max.x()) {
-    gate.fail("x", "the gate must stand downstream of the packing box");
-  }
-  config.settle_time = gate.number("settle_time", config.settle_time, Range::non_negative());
-
-  // Debris that passes the dam leaves the flume's end and falls freely; only elements thrown
-  // sideways or upstream out of the flume, or falling for minutes, are errors.
-  const double margin = 1.0;
-  p.domain_min = Eigen::Vector3d(-margin, -margin, -100.0);
-  p.domain_max = Eigen::Vector3d(config.flume.length + 100.0, config.flume.width + margin,
-                                 config.flume.wall_height + 10 * margin);
+  set_domain(config);
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());
   return config;

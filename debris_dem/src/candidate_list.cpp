@@ -36,7 +36,7 @@ ContactPair make_pair(const DemWorld& world, int a, int b) {
   const Material& mb = materials[eb.material];
   const PairConstants c = pair_constants(
       ma.normal_stiffness, mb.normal_stiffness, ma.tangential_stiffness, mb.tangential_stiffness,
-      ma.effective_damping_ratio(), mb.effective_damping_ratio(), ma.friction, mb.friction,
+      world.damping_ratio(ea.material), world.damping_ratio(eb.material), ma.friction, mb.friction,
       ea.fixed ? 0.0 : ea.mass, eb.fixed ? 0.0 : eb.mass);
   ContactPair p;
   p.a = a;

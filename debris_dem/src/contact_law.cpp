@@ -1,6 +1,9 @@
 #include "cosim/debris_dem/contact_law.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
+#include <stdexcept>
 
 namespace cosim::dem {
 
@@ -25,6 +28,51 @@ PairConstants pair_constants(double kn_a, double kn_b, double kt_a, double kt_b,
   return c;
 }
 
+double clipped_restitution(double zeta) {
+  if (!(zeta >= 0.0)) throw std::invalid_argument("clipped_restitution: zeta must be >= 0");
+  // Time in units of 1/omega_0, omega_0 = sqrt(k / m_eff); x(0) = 0, x'(0) = v. The force
+  // k x + c x' = -m x'' first vanishes at t1 and the bodies leave with x'(t1) = -e v.
+  constexpr double kCritical = 1e-7;  // band around zeta = 1 where both forms lose digits
+  if (zeta < 1.0 - kCritical) {
+    // Underdamped: x'' = 0 at omega_d t1 = atan2(2 zeta w, 2 zeta^2 - 1),
+    // w = sqrt(1 - zeta^2), where |x'| = v exp(-zeta t1) exactly.
+    const double w = std::sqrt(1.0 - zeta * zeta);
+    const double phase = std::atan2(2.0 * zeta * w, 2.0 * zeta * zeta - 1.0);
+    return std::exp(-zeta * phase / w);
+  }
+  if (zeta <= 1.0 + kCritical) return std::exp(-2.0);  // critical damping
+  // Overdamped: x ~ exp(-r1 t) - exp(-r2 t), r = zeta -+ sqrt(zeta^2 - 1); x'' = 0 at
+  // t1 = 2 ln(r2 / r1) / (r2 - r1), where x' = -v (r1 / r2) exp(-r1 t1).
+  const double q = std::sqrt(zeta * zeta - 1.0);
+  const double ratio = (zeta - q) / (zeta + q);
+  return std::pow(ratio, 1.0 + 2.0 * (zeta - q) / (2.0 * q));
+}
+
+double damping_ratio_for_restitution(double e, bool clipped) {
+  if (!(e > 0.0 && e < 1.0)) {
+    throw std::invalid_argument("damping_ratio_for_restitution: e must lie in (0, 1)");
+  }
+  const double log_e = std::log(e);
+  // Unclipped: inverse of e = exp(-pi zeta / sqrt(1 - zeta^2)) (references/dem_contact.md).
+  const double free_zeta = -log_e / std::sqrt(std::numbers::pi * std::numbers::pi + log_e * log_e);
+  if (!clipped) return free_zeta;
+  // Clipped: the clipped law ends the contact early and so dissipates less for the same zeta;
+  // clipped_restitution falls monotonically from 1 (zeta = 0) to 0 (zeta -> infinity). Bracket
+  // from the unclipped zeta upwards, then bisect to round-off (once per material).
+  double low = 0.0;
+  double high = std::max(free_zeta, 1e-3);
+  while (clipped_restitution(high) > e) {
+    low = high;
+    high *= 2.0;
+    if (high > 1e8) throw std::invalid_argument("damping_ratio_for_restitution: e too small");
+  }
+  for (int iteration = 0; iteration < 200 && high - low > 1e-15 * high; ++iteration) {
+    const double middle = 0.5 * (low + high);
+    (clipped_restitution(middle) > e ? low : high) = middle;
+  }
+  return 0.5 * (low + high);
+}
+
 void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
                        const Eigen::Vector3d& relative_velocity, double dt, bool clip) {
   const Eigen::Vector3d& n = geometry.normal;
@@ -47,9 +95,11 @@ void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
   spring += tangential_velocity * dt;  // eq. (11): S(t) = S(t - dt) + k dq
   Eigen::Vector3d tangential_force =
       -pair.tangential_stiffness * spring - pair.tangential_damping * tangential_velocity;
-  // Mohr-Coulomb, cohesion 0 (fig. 3b): |P_s| <= P_n tan(phi). While sliding the spring holds
-  // exactly the limit force, so sliding stops smoothly when the load drops.
-  const double limit = pair.friction * std::max(normal_force, 0.0);
+  // Mohr-Coulomb, cohesion 0 (fig. 3b): |P_s| <= P_n tan(phi), P_n the transmitted normal force
+  // (see the header: clipped total, or the spring part when the dashpot may pull). While sliding
+  // the spring holds exactly the limit force, so sliding stops smoothly when the load drops.
+  const double coulomb_load = clip ? normal_force : pair.normal_stiffness * geometry.overlap;
+  const double limit = pair.friction * std::max(coulomb_load, 0.0);
   const double magnitude = tangential_force.norm();
   if (magnitude > limit) {
     tangential_force *= magnitude > 0.0 ? limit / magnitude : 0.0;

@@ -1,9 +1,8 @@
-// One DEM time step: candidate lists, contact forces, fluid forces and the central-difference
-// update of seed 004 eq. (7)-(9), written as leapfrog (velocities at half steps, which is the
-// backward difference of eq. 8 used by the dashpots and the drag).
+// One DEM time step: candidate lists, contact forces and the central-difference update of seed
+// 004 eq. (7)-(9), written as leapfrog (velocities at half steps, which is the backward
+// difference of eq. 8 used by the dashpots and the drag). Fluid forces: dem_fluid.cpp.
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <sstream>
 
 #include "candidate_list.hpp"
@@ -199,39 +198,7 @@ void DemWorld::compute_forces(double dt) {
   }
 }
 
-void DemWorld::apply_fluid(const std::vector<Eigen::Vector3d>& ambient_velocity,
-                           const std::vector<double>& water_fraction, bool accumulate) {
-  if (ambient_velocity.empty()) return;
-  const double rho = parameters_.fluid_density;
-  const int count = static_cast<int>(moving_.size());
-  for (int k = 0; k < count; ++k) {
-    const Element& e = elements_[moving_[k]];
-    const double fraction = std::clamp(water_fraction[k], 0.0, 1.0);
-    if (fraction <= 0.0) continue;
-    // Seed 004 eq. (48): drag 0.5 C_D rho A |U - v| (U - v) on the projected area normal to the
-    // relative flow; eq. (49): buoyancy rho V g, opposite to gravity. Both scale with the
-    // submerged fraction (the seed gives no fluid force above the water depth). Eq. (47): no
-    // fluid torque.
-    const Eigen::Vector3d relative = ambient_velocity[k] - e.velocity;
-    const double speed = relative.norm();
-    double area = std::numbers::pi * e.radius * e.radius;
-    double drag_coefficient = parameters_.drag_coefficient_sphere;
-    if (e.kind == ElementKind::kCylinder) {
-      const double cosine = speed > 0.0 ? std::abs(e.axis.dot(relative) / speed) : 1.0;
-      const double sine = std::sqrt(std::max(0.0, 1.0 - cosine * cosine));
-      area = area * cosine + 4.0 * e.radius * e.half_length * sine;
-      drag_coefficient = parameters_.drag_coefficient_cylinder;
-    }
-    const double volume = e.mass / materials_[e.material].density;
-    const Eigen::Vector3d fluid_force =
-        fraction * (0.5 * drag_coefficient * rho * area * speed * relative -
-                    rho * volume * parameters_.gravity);
-    force_[moving_[k]] += fluid_force;
-    if (accumulate) mean_fluid_force_[k] += fluid_force;
-  }
-}
-
-void DemWorld::integrate(double dt) {
+void DemWorld::integrate(double dt, bool with_fluid) {
   const double size = parameters_.region_size;
   const int threads = std::max(1, parameters_.threads);
   const int count = static_cast<int>(moving_.size());
@@ -240,7 +207,11 @@ void DemWorld::integrate(double dt) {
   for (int k = 0; k < count; ++k) {
     Element& e = elements_[moving_[k]];
     // Eq. (9) in leapfrog form: v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.
-    e.velocity += force_[moving_[k]] * (e.inverse_mass * dt);
+    if (with_fluid && (added_mass_normal_[k] > 0.0 || added_mass_axial_[k] > 0.0)) {
+      e.velocity += added_mass_acceleration(k) * dt;
+    } else {
+      e.velocity += force_[moving_[k]] * (e.inverse_mass * dt);
+    }
     e.local += e.velocity * dt;
     // Eq. (46): move to the neighbouring region's origin when the local position leaves it.
     if (e.local.cwiseAbs().maxCoeff() > 0.75 * size) {
@@ -299,44 +270,10 @@ void DemWorld::check_stability() const {
 void DemWorld::step(double dt) {
   update_list_if_needed(dt);
   compute_forces(dt);
-  integrate(dt);
+  integrate(dt, false);
   time_ += dt;
   ++step_count_;
   check_stability();
-}
-
-WindowReport DemWorld::advance(double window_dt,
-                               const std::vector<Eigen::Vector3d>& ambient_velocity,
-                               const std::vector<double>& water_fraction) {
-  if (!(window_dt > 0.0)) throw std::invalid_argument("advance: window_dt must be positive");
-  if (!ambient_velocity.empty() &&
-      (ambient_velocity.size() != moving_.size() || water_fraction.size() != moving_.size())) {
-    throw std::invalid_argument(
-        "advance: need one ambient velocity and water fraction per "
-        "moving element (" +
-        std::to_string(moving_.size()) + ")");
-  }
-  const double target = parameters_.user_dt > 0.0 ? parameters_.user_dt : stable_dt();
-  const int substeps = std::max(1, static_cast<int>(std::ceil(window_dt / target - 1e-9)));
-  const double dt = window_dt / substeps;
-  for (auto& f : mean_fluid_force_) f.setZero();
-  window_max_overlap_ = 0.0;
-  for (int s = 0; s < substeps; ++s) {
-    update_list_if_needed(dt);
-    compute_forces(dt);
-    apply_fluid(ambient_velocity, water_fraction, true);
-    integrate(dt);
-    time_ += dt;
-    ++step_count_;
-    check_stability();
-  }
-  for (auto& f : mean_fluid_force_) f /= substeps;
-  WindowReport report;
-  report.substeps = substeps;
-  report.substep = dt;
-  report.contacts = contact_count();
-  report.max_overlap_ratio = window_max_overlap_;
-  return report;
 }
 
 }  // namespace cosim::dem

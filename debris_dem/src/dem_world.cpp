@@ -6,13 +6,9 @@
 
 namespace cosim::dem {
 
-double Material::effective_damping_ratio() const {
-  if (restitution > 0.0 && restitution < 1.0) {
-    // Inverse of e = exp(-pi zeta / sqrt(1 - zeta^2)) (references/dem_contact.md).
-    const double log_e = std::log(restitution);
-    return -log_e / std::sqrt(std::numbers::pi * std::numbers::pi + log_e * log_e);
-  }
+double Material::effective_damping_ratio(bool clipped) const {
   if (restitution >= 1.0) return 0.0;
+  if (restitution > 0.0) return damping_ratio_for_restitution(restitution, clipped);
   return damping_ratio;
 }
 
@@ -31,7 +27,14 @@ int DemWorld::material_index(const Material& m) {
     }
   }
   materials_.push_back(m);
+  damping_clipped_.push_back(m.effective_damping_ratio(true));
+  damping_unclipped_.push_back(m.effective_damping_ratio(false));
   return static_cast<int>(materials_.size()) - 1;
+}
+
+double DemWorld::damping_ratio(int material) const {
+  return parameters_.clip_normal_force ? damping_clipped_.at(material)
+                                       : damping_unclipped_.at(material);
 }
 
 int DemWorld::add_element(Element element, const Eigen::Vector3d& anchor,
@@ -49,6 +52,11 @@ int DemWorld::add_element(Element element, const Eigen::Vector3d& anchor,
     element.inverse_mass = 1.0 / element.mass;
     moving_.push_back(static_cast<int>(elements_.size()));
     mean_fluid_force_.emplace_back(Eigen::Vector3d::Zero());
+    submerged_fraction_.push_back(0.0);
+    voidage_.push_back(1.0);
+    added_mass_normal_.push_back(0.0);
+    added_mass_axial_.push_back(0.0);
+    fluid_acceleration_.emplace_back(Eigen::Vector3d::Zero());
   }
   elements_.push_back(element);
   force_.emplace_back(Eigen::Vector3d::Zero());

@@ -41,6 +41,20 @@ std::vector<int> add_flume(DemWorld& world, const FlumeSpec& s, const Material& 
   return ids;
 }
 
+std::vector<int> add_open_box(DemWorld& world, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                              const Material& material) {
+  if ((hi - lo).minCoeff() <= 0.0) throw std::invalid_argument("add_open_box: hi must exceed lo");
+  std::vector<int> ids;
+  const double x0 = lo.x(), y0 = lo.y(), z0 = lo.z();
+  const double x1 = hi.x(), y1 = hi.y(), z1 = hi.z();
+  add_rectangle(world, {x0, y0, z0}, {x1, y0, z0}, {x1, y1, z0}, {x0, y1, z0}, material, ids);
+  add_rectangle(world, {x0, y0, z0}, {x1, y0, z0}, {x1, y0, z1}, {x0, y0, z1}, material, ids);
+  add_rectangle(world, {x0, y1, z0}, {x1, y1, z0}, {x1, y1, z1}, {x0, y1, z1}, material, ids);
+  add_rectangle(world, {x0, y0, z0}, {x0, y1, z0}, {x0, y1, z1}, {x0, y0, z1}, material, ids);
+  add_rectangle(world, {x1, y0, z0}, {x1, y1, z0}, {x1, y1, z1}, {x1, y0, z1}, material, ids);
+  return ids;
+}
+
 std::vector<int> add_bed_roughness(DemWorld& world, double x0, double x1, double width,
                                    double d_min, double d_max, unsigned seed,
                                    const Material& material) {

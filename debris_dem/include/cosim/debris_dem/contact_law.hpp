@@ -49,8 +49,26 @@ struct PairConstants {
 PairConstants pair_constants(double kn_a, double kn_b, double kt_a, double kt_b, double zeta_a,
                              double zeta_b, double mu_a, double mu_b, double mass_a, double mass_b);
 
+// Restitution of the linear spring-dashpot with damping ratio zeta when the total normal force
+// is clipped at zero (no tension): the contact ends as soon as k x + c x' = 0, before the overlap
+// closes. Closed form of Schwager & Poeschel, Granular Matter 9 (2007) 465-469;
+// e.g. zeta = 0.2 gives 0.572 where the unclipped law gives 0.527.
+double clipped_restitution(double zeta);
+
+// Damping ratio that gives restitution e (0 < e < 1) under either normal law: the inverse of
+// e = exp(-pi zeta / sqrt(1 - zeta^2)) when the dashpot may pull, the numerical inverse of
+// clipped_restitution() otherwise (reaches any e > 0: the clipped law's e falls below exp(-2)
+// only for an overdamped dashpot, zeta > 1).
+double damping_ratio_for_restitution(double e, bool clipped);
+
 // Evaluates the force on A for a touching geometry and relative velocity v_A - v_B at the
 // contact point; updates the tangential spring. clip: total normal force >= 0.
+// The Coulomb limit is friction times the normal force the contact transmits over an impact:
+// clipped, the total (spring + dashpot, >= 0); unclipped, the spring part k delta (Cundall &
+// Strack, Geotechnique 29 (1979) 47-65, who check the elastic forces against Coulomb before
+// adding the dashpots). The dashpot's impulse c [delta] vanishes over a whole unclipped contact,
+// so either way the friction impulse of a sliding impact is mu times its normal impulse, as in
+// the rigid-body closed forms (references/dem_contact.md), and friction never pushes.
 void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
                        const Eigen::Vector3d& relative_velocity, double dt, bool clip);
 

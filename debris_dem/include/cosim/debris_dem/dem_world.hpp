@@ -30,12 +30,27 @@ struct Material {
   double normal_stiffness = 1.0e4;      // K_n, N/m (seed 004 table 3)
   double tangential_stiffness = 4.0e3;  // K_s, N/m (seed 004 table 3)
   // Damping ratio h of the normal and tangential dashpots (seed 004 table 3: h = 0.2). If
-  // restitution > 0 it overrides: zeta = -ln e / sqrt(pi^2 + ln^2 e) (references/dem_contact.md).
+  // restitution > 0 it overrides: the damping ratio that gives this head-on e under the normal
+  // law in use (damping_ratio_for_restitution in contact_law.hpp), so e is what is asked whether
+  // or not the normal force is clipped.
   double damping_ratio = 0.2;
   double restitution = 0.0;
   double friction = 0.404;  // tan(phi) of the Mohr-Coulomb limit, cohesion c = 0 (table 3)
 
-  [[nodiscard]] double effective_damping_ratio() const;
+  // clipped: DemParameters::clip_normal_force of the world the material is used in.
+  [[nodiscard]] double effective_damping_ratio(bool clipped) const;
+};
+
+// Drag on an element in the fluid (dem_fluid.cpp).
+enum class DragLaw : std::uint8_t {
+  // Seed 004 eq. (48): constant C_D (drag_coefficient_sphere / _cylinder) on the projected area.
+  kSeed004,
+  // Spheres: Schiller & Naumann (1933) C_D(Re), Re on the diameter. Logs: the crossflow
+  // (independence) principle, Hoerner, Fluid-Dynamic Drag (1965): the velocity component
+  // normal to the axis drives C_D(Re_n) of a circular cylinder (White's fit) on D L, the axial
+  // component the sphere C_D(Re_t) of the log's diameter on the end area pi r^2 (end-on flow
+  // past a blunt body; logs in a stream mostly see crossflow).
+  kSchillerNaumann,
 };
 
 struct DemParameters {
@@ -46,6 +61,30 @@ struct DemParameters {
   // Seed 004 gives a log the drag of a sphere of equal projected area; here the area normal to
   // the relative flow, 2 r L sin + pi r^2 cos, is used with this coefficient.
   double drag_coefficient_cylinder = 0.49;
+  // The unresolved CFD-DEM force set (Zhou, Kuang, Chu & Yu, J. Fluid Mech. 661 (2010) 482-510):
+  // drag, pressure gradient and added mass, all on the submerged volume V_sub. The defaults
+  // keep seed 004's drag and buoyancy alone.
+  DragLaw drag_law = DragLaw::kSeed004;
+  double fluid_viscosity = 1.0e-3;  // mu, Pa s (water at 20 C), for the Reynolds numbers
+  // Multiply the drag by eps^(2 - chi) of Di Felice (1994), eps the local fluid volume fraction
+  // local_voidage() estimates from the moving elements within voidage_radius (m, several
+  // element diameters), updated once per window (elements move far less than the radius in
+  // one). Needs kSchillerNaumann.
+  bool voidage_correction = false;
+  double voidage_radius = 0.0;
+  // Pressure-gradient force -V_sub grad p with grad p = rho_f (g - Du/Dt): besides buoyancy
+  // -rho_f V_sub g it adds rho_f V_sub Du/Dt (the fluid's acceleration at the element).
+  bool fluid_acceleration_force = false;
+  // Added mass rho_f V_sub C (Du/Dt - dv/dt), integrated implicitly (the element's inertia
+  // becomes m + rho_f V_sub C), so light elements stay stable. C = C_a for spheres (0.5, potential
+  // flow: Lamb, Hydrodynamics, 6th ed. (1932)); for logs the tensor C_n (I - a a^T) + C_t a a^T:
+  // C_n = 1 of a circular cylinder per unit length and C_t ~ 0 along a slender body (Newman,
+  // Marine Hydrodynamics (1977) ch. 4; Brennen, A review of added mass and fluid inertial forces,
+  // NCEL CR 82.010 (1982)). The contact dashpots keep the solid mass (pair_constants).
+  bool added_mass = false;
+  double added_mass_sphere = 0.5;
+  double added_mass_cylinder_normal = 1.0;
+  double added_mass_cylinder_axial = 0.0;
   double list_margin = 5.0e-3;          // r_dam of table 3: extra reach of candidate lists
   double list_reset_interval = 1.0e-3;  // t_reset of table 3 (s)
   // Also rebuild the list as soon as two elements may have closed the margin (translation plus a
@@ -66,6 +105,18 @@ struct DemParameters {
 };
 
 enum class ElementKind : std::uint8_t { kSphere, kCylinder, kTriangle };
+
+// The fluid at the moving elements over one window, one entry per moving element (order of
+// moving_elements()). Empty velocity: no fluid at all.
+struct FluidAtElements {
+  std::vector<Eigen::Vector3d> velocity;      // ambient fluid velocity u_f, m/s
+  std::vector<Eigen::Vector3d> acceleration;  // Du/Dt of the fluid, m/s^2; empty = 0
+  // World z of the free surface above the element; NaN (or empty) = use water_fraction;
+  // -inf = no water above (dry).
+  std::vector<double> surface_elevation;
+  // Submerged share 0..1; needed for every element without a finite surface_elevation.
+  std::vector<double> water_fraction;
+};
 
 struct WindowReport {
   int substeps = 0;
@@ -124,14 +175,25 @@ class DemWorld {
   [[nodiscard]] std::vector<Eigen::Vector3d> element_velocities() const;
 
   [[nodiscard]] double stable_dt() const;
-  // Sub-cycles window_dt. Inputs are per moving element (empty vectors: no fluid).
+  // Sub-cycles window_dt with the fluid held over the window (dem_fluid.cpp).
+  WindowReport advance(double window_dt, const FluidAtElements& fluid);
+  // Seed 004 inputs: ambient velocity and water fraction per moving element (empty: no fluid).
   WindowReport advance(double window_dt, const std::vector<Eigen::Vector3d>& ambient_velocity,
                        const std::vector<double>& water_fraction);
   // One sub-step of dt without fluid (tests, packing).
   void step(double dt);
+  // Window-mean total force the fluid exerted on each moving element (drag, pressure gradient
+  // with buoyancy, added mass): the fluid takes exactly minus it.
   [[nodiscard]] const std::vector<Eigen::Vector3d>& window_mean_fluid_force() const {
     return mean_fluid_force_;
   }
+  // Submerged share of each moving element at the last sub-step (0 without fluid).
+  [[nodiscard]] const std::vector<double>& submerged_fraction() const {
+    return submerged_fraction_;
+  }
+  // Local fluid volume fraction of each moving element the last window used (1 without the
+  // voidage correction).
+  [[nodiscard]] const std::vector<double>& voidage() const { return voidage_; }
 
   [[nodiscard]] double kinetic_energy() const;
   [[nodiscard]] double potential_energy() const;  // m g . x relative to the world origin
@@ -172,6 +234,8 @@ class DemWorld {
   };
   [[nodiscard]] const std::vector<Element>& elements() const { return elements_; }
   [[nodiscard]] const std::vector<Material>& materials() const { return materials_; }
+  // Material m's dashpot damping ratio under the normal law in use (solved once per material).
+  [[nodiscard]] double damping_ratio(int material) const;
   // Displacement from element b's anchor to element a's anchor via local origins (eq. 45-46).
   [[nodiscard]] Eigen::Vector3d displacement(int a, int b) const;
 
@@ -179,20 +243,34 @@ class DemWorld {
   int add_element(Element element, const Eigen::Vector3d& anchor, const Material& material);
   int material_index(const Material& material);
   void compute_forces(double dt);
-  void integrate(double dt);
+  // with_fluid: use the added mass and fluid acceleration apply_fluid() left for this sub-step.
+  void integrate(double dt, bool with_fluid);
   void check_stability() const;
   void update_list_if_needed(double dt);
-  void apply_fluid(const std::vector<Eigen::Vector3d>& ambient_velocity,
-                   const std::vector<double>& water_fraction, bool accumulate);
+  void check_fluid(const FluidAtElements& fluid) const;
+  void update_voidage();
+  void apply_fluid(const FluidAtElements& fluid);
+  [[nodiscard]] double element_submerged_fraction(int k, const FluidAtElements& fluid) const;
+  [[nodiscard]] Eigen::Vector3d drag_force(int k, const Eigen::Vector3d& relative) const;
+  // Acceleration of moving element k with its added mass taken implicitly; books the added-mass
+  // force into the window's fluid force.
+  Eigen::Vector3d added_mass_acceleration(int k);
 
   DemParameters parameters_;
   std::vector<Element> elements_;
   std::vector<Material> materials_;
+  std::vector<double> damping_clipped_;    // per material, no-tension normal law
+  std::vector<double> damping_unclipped_;  // per material, dashpot free to pull
   std::vector<int> moving_;
   std::vector<Eigen::Vector3d> force_;
   std::vector<Eigen::Vector3d> torque_;
-  std::vector<Eigen::Vector3d> fluid_force_;  // per moving element, current sub-step
-  std::vector<Eigen::Vector3d> mean_fluid_force_;
+  // Per moving element.
+  std::vector<Eigen::Vector3d> mean_fluid_force_;  // summed over sub-steps, then the mean
+  std::vector<double> submerged_fraction_;
+  std::vector<double> voidage_;
+  std::vector<double> added_mass_normal_;            // kg, rho_f V_sub C (spheres: all directions)
+  std::vector<double> added_mass_axial_;             // kg, along a log's axis
+  std::vector<Eigen::Vector3d> fluid_acceleration_;  // Du/Dt of this sub-step
   std::vector<ContactPair> pairs_;
   std::vector<ContactPair> triangle_pairs_;  // grouped by moving element
   std::vector<int> triangle_group_start_;

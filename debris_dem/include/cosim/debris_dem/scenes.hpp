@@ -23,6 +23,11 @@ struct FlumeSpec {
 // Bed and side walls as triangles (two per rectangle); returns their element ids.
 std::vector<int> add_flume(DemWorld& world, const FlumeSpec& spec, const Material& material);
 
+// A box [lo, hi] closed by its floor (z = lo.z) and four side walls, open at the top (world z
+// up), as fixed triangles (two per face); returns their element ids.
+std::vector<int> add_open_box(DemWorld& world, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                              const Material& material);
+
 // Fixed roughness spheres on the bed, embedded by their radius (seed 004 fig. 12: 7-20 mm
 // spheres), on a jittered grid of spacing ~ d_max over [x0, x1] x [0, width].
 std::vector<int> add_bed_roughness(DemWorld& world, double x0, double x1, double width,

@@ -1,0 +1,167 @@
+// The debris_dem scenario section: the existing flume scenes keep their meaning, box and
+// explicit-element scenes with the full fluid force set parse, and every error names file, line
+// and key.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "cosim/prescribed_flow/config.hpp"
+#include "cosim/scenario/scene.hpp"
+#include "dem_config.hpp"
+
+namespace cosim::dem {
+namespace {
+
+std::map<std::string, scenario::ParticipantParser> parsers(std::optional<DebrisConfig>& out) {
+  return {{"debris_dem",
+           [&out](scenario::Section& section, const scenario::Scene& scene) {
+             out = parse_config(section, scene.output_interval);
+           }},
+          {"prescribed_flow", [](scenario::Section& section, const scenario::Scene&) {
+             prescribed_flow::parse_settings(section);
+           }}};
+}
+
+std::filesystem::path write_scene(const std::string& body) {
+  const auto folder = std::filesystem::temp_directory_path() / "cosim-dem-config-test";
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder / "scenario.yaml")
+      << "name: t\nduration: 0.1\ncoupling:\n  window: 0.01\nparticipants:\n  debris_dem:\n"
+      << body;
+  return folder / "scenario.yaml";
+}
+
+DebrisConfig parse_body(const std::string& body) {
+  std::optional<DebrisConfig> config;
+  scenario::load_scene(write_scene(body), parsers(config));
+  return *config;
+}
+
+TEST(DemConfig, ExistingFlumeScenesKeepTheSeed004Model) {
+  for (const char* scene : {"debris_capture_small", "debris_capture"}) {
+    std::optional<DebrisConfig> config;
+    scenario::load_scene(std::filesystem::path(COSIM_SCENARIOS) / scene, parsers(config));
+    ASSERT_TRUE(config.has_value()) << scene;
+    const DemParameters& p = config->parameters;
+    EXPECT_EQ(p.drag_law, DragLaw::kSeed004) << scene;
+    EXPECT_FALSE(p.added_mass);
+    EXPECT_FALSE(p.fluid_acceleration_force);
+    EXPECT_FALSE(p.voidage_correction);
+    EXPECT_DOUBLE_EQ(p.drag_coefficient_sphere, 0.49);
+    ASSERT_TRUE(config->flume && config->dam && config->packing && config->gate) << scene;
+    EXPECT_FALSE(config->box);
+    EXPECT_TRUE(config->elements.empty());
+    // The domain of the flume scenes as before: far downstream and down, 1 m sideways.
+    EXPECT_EQ(p.domain_min, Eigen::Vector3d(-1.0, -1.0, -100.0));
+    EXPECT_EQ(p.domain_max.x(), config->flume->length + 100.0);
+  }
+}
+
+const char* kBoxScene = R"(    drag_law: schiller_naumann
+    fluid_density: 970
+    fluid_viscosity: 0.373
+    voidage_correction: true
+    voidage_radius: 0.05
+    box: {min: [-0.05, -0.05, 0], max: [0.05, 0.05, 0.16]}
+    elements:
+      - {kind: sphere, center: [0, 0, 0.1275], diameter: 0.015, density: 1120}
+      - {kind: log, center: [0, 0.02, 0.05], diameter: 0.01, length: 0.05, axis: [0, 2, 0],
+         density: 800, velocity: [0.1, 0, 0]}
+)";
+
+TEST(DemConfig, BoxAndElementsWithTheUnresolvedFluidForceSet) {
+  const DebrisConfig config = parse_body(kBoxScene);
+  const DemParameters& p = config.parameters;
+  EXPECT_EQ(p.drag_law, DragLaw::kSchillerNaumann);
+  EXPECT_DOUBLE_EQ(p.fluid_viscosity, 0.373);
+  EXPECT_TRUE(p.voidage_correction);
+  EXPECT_DOUBLE_EQ(p.voidage_radius, 0.05);
+  // The Schiller-Naumann law defaults to the whole set: pressure gradient and added mass.
+  EXPECT_TRUE(p.fluid_acceleration_force);
+  EXPECT_TRUE(p.added_mass);
+  EXPECT_DOUBLE_EQ(p.added_mass_sphere, 0.5);
+  EXPECT_DOUBLE_EQ(p.added_mass_cylinder_normal, 1.0);
+  EXPECT_DOUBLE_EQ(p.added_mass_cylinder_axial, 0.0);
+  EXPECT_FALSE(config.flume || config.packing || config.gate || config.dam);
+  ASSERT_TRUE(config.box);
+  ASSERT_EQ(config.elements.size(), 2u);
+  EXPECT_FALSE(config.elements[0].log);
+  EXPECT_DOUBLE_EQ(config.elements[0].material.density, 1120.0);
+  EXPECT_TRUE(config.elements[1].log);
+  EXPECT_EQ(config.elements[1].axis, Eigen::Vector3d::UnitY());
+  EXPECT_EQ(config.elements[1].velocity, Eigen::Vector3d(0.1, 0, 0));
+  // Element materials take the contact constants of materials.debris / materials.logs.
+  EXPECT_DOUBLE_EQ(config.elements[1].material.friction, Material{}.friction);
+  // Escape by more than 1 m sideways or below, 10 m above, is an error.
+  EXPECT_EQ(p.domain_min, Eigen::Vector3d(-1.05, -1.05, -1.0));
+  EXPECT_NEAR(p.domain_max.z(), 10.16, 1e-12);
+}
+
+// Message of the scenario error for `body`, with the line of the first line holding `needle`.
+std::pair<std::string, int> error_and_line(const std::string& body, const std::string& needle) {
+  const auto file = write_scene(body);
+  std::ifstream in(file);
+  std::string line;
+  int line_number = 0, found = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (found == 0 && line.find(needle) != std::string::npos) found = line_number;
+  }
+  std::optional<DebrisConfig> config;
+  try {
+    scenario::load_scene(file, parsers(config));
+  } catch (const scenario::ScenarioError& error) {
+    return {error.what(), found};
+  }
+  return {"", found};
+}
+
+TEST(DemConfig, ErrorsNameFileLineAndKey) {
+  const std::string sphere =
+      "    elements:\n      - {kind: sphere, center: [0, 0, 0], "
+      "diameter: 0.01, density: 1000}\n";
+  struct Case {
+    std::string body, needle, key, problem;
+  };
+  const std::vector<Case> cases{
+      {"    voidage_correction: true\n" + sphere, "voidage_correction", "voidage_correction",
+       "needs drag_law: schiller_naumann"},
+      {"    drag_law: schiller_naumann\n    voidage_correction: true\n" + sphere, "drag_law",
+       "voidage_radius", "required key is missing"},  // a missing key: its mapping
+      {"    fluid_viscosity: 0.001\n" + sphere, "fluid_viscosity", "fluid_viscosity",
+       "only used with drag_law: schiller_naumann"},
+      {"    drag_law: schiller_naumann\n    added_mass_coefficient: 7\n" + sphere,
+       "added_mass_coefficient", "added_mass_coefficient", "out of range"},
+      {"    added_mass_coefficient: 0.5\n" + sphere, "added_mass_coefficient",
+       "added_mass_coefficient", "only used with added_mass: true"},
+      {"    drag_law: stokes\n" + sphere, "drag_law", "drag_law",
+       "'stokes' is not one of: seed004, schiller_naumann"},
+      {"    elements:\n      - {kind: sphere, center: [0, 0, 0], diameter: 0.01, length: 0.1,"
+       " density: 1000}\n",
+       "length", "elements[0].length", "only used with kind: log"},
+      {"    elements:\n      - {kind: log, center: [0, 0, 0], diameter: 0.01, length: 0.1,\n"
+       "         axis: [0, 0, 0], density: 800}\n",
+       "axis", "elements[0].axis", "must not be the zero vector"},
+      {"    elements:\n      - {kind: cube, center: [0, 0, 0], diameter: 0.01}\n", "cube",
+       "elements[0].kind", "'cube' is not one of: sphere, log"},
+      {"    box: {min: [0, 0, 0], max: [1, 0, 1]}\n" + sphere, "box", "box.max", "must exceed min"},
+      {"    box: {min: [1, 1, 1], max: [2, 2, 2]}\n" + sphere, "kind: sphere", "elements[0].center",
+       "lies outside the box"},
+      {"    box: {min: [0, 0, 0], max: [1, 1, 1]}\n", "box", "elements",
+       "nothing moves: give a packing or elements"},
+      {"    dam: {x: 0.5, horizontal_gap: 0.05}\n" + sphere, "dam", "dam",
+       "only used with a flume"},
+  };
+  for (const Case& c : cases) {
+    const auto [message, line] = error_and_line(c.body, c.needle);
+    const std::string where =
+        "scenario.yaml:" + std::to_string(line) + ": key 'participants.debris_dem." + c.key + "': ";
+    EXPECT_NE(message.find(where), std::string::npos) << message << "\nexpected: " << where;
+    EXPECT_NE(message.find(c.problem), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+}  // namespace cosim::dem
