@@ -215,12 +215,11 @@ void set_domain(DebrisConfig& config) {
 
 }  // namespace
 
-DebrisConfig parse_config(scenario::Section& section, double scene_output_interval) {
+DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& scene) {
+  const double scene_output_interval = scene.output_interval;
   DebrisConfig config;
   DemParameters& p = config.parameters;
-  config.slope_degrees = section.number("slope_degrees", 0.0, Range::between(0.0, 60.0));
-  const double g = section.number("gravity_magnitude", 9.81, Range::non_negative());
-  p.gravity = slope_gravity(config.slope_degrees, g);
+  p.gravity = scene.world.gravity;  // the scene's one gravity (a flume: world.slope_degrees)
   parse_fluid_forces(section, p);
   p.user_dt = section.number("substep", 1.0e-5, Range::non_negative());
   p.safety_factor = section.number("safety_factor", p.safety_factor, Range{0.0, 1.0, true});
@@ -248,6 +247,30 @@ DebrisConfig parse_config(scenario::Section& section, double scene_output_interv
   set_domain(config);
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());
+  if (section.has("reference")) {
+    auto reference = section.child("reference");
+    ElementReferenceSettings r;
+    r.kind = reference.choice("kind", {"settling", "floating"});
+    if (config.elements.size() != 1 || config.packing) {
+      reference.fail("kind", "a " + r.kind + " reference needs exactly one element and no packing");
+    }
+    if (r.kind == "settling" && p.drag_law != DragLaw::kSchillerNaumann) {
+      reference.fail("kind",
+                     "the settling reference is the Schiller-Naumann terminal velocity: "
+                     "set drag_law: schiller_naumann");
+    }
+    const double ratio = config.elements.front().material.density / p.fluid_density;
+    if (r.kind == "settling" && !(ratio > 1.0)) {
+      reference.fail("kind",
+                     "the element does not sink (density ratio " + std::to_string(ratio) + ")");
+    }
+    if (r.kind == "floating" && !(ratio > 0.0 && ratio < 1.0)) {
+      reference.fail("kind",
+                     "the element does not float (density ratio " + std::to_string(ratio) + ")");
+    }
+    r.average_from = reference.number("average_from", 0.0, Range::non_negative());
+    config.reference = r;
+  }
   return config;
 }
 

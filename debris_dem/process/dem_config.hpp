@@ -23,7 +23,9 @@
 
 #include "cosim/debris_dem/dem_world.hpp"
 #include "cosim/debris_dem/scenes.hpp"
+#include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
+#include "element_reference.hpp"
 
 namespace cosim::dem {
 
@@ -60,7 +62,6 @@ struct GateSettings {
 
 struct DebrisConfig {
   DemParameters parameters;
-  double slope_degrees = 0;
   Material debris, logs, structure;
   std::optional<FlumeSpec> flume;
   std::optional<RoughnessSettings> roughness;  // needs the flume
@@ -71,8 +72,10 @@ struct DebrisConfig {
   std::optional<GateSettings> gate;  // needs the flume and the packing
   std::vector<ElementSettings> elements;
   double output_interval = 0;
+  std::optional<ElementReferenceSettings> reference;  // single-element scenes
 };
 
-DebrisConfig parse_config(scenario::Section& section, double scene_output_interval);
+// `scene`: the top level, already read (output interval, the world's gravity).
+DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& scene);
 
 }  // namespace cosim::dem

@@ -15,134 +15,14 @@
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/coupler/solver_loop.hpp"
 #include "cosim/output/point_series.hpp"
+#include "debris_scene.hpp"
 #include "dem_config.hpp"
 
 namespace {
 
 using namespace cosim;
-
-struct BuiltScene {
-  dem::Packing packing;
-  std::vector<int> explicit_elements;  // the `elements:` list, in order
-  double sphere_volume = 0.0;
-  double log_volume = 0.0;
-  double settle_seconds = 0.0;  // wall time of the settling behind the gate
-};
-
-BuiltScene build_scene(dem::DemWorld& world, const dem::DebrisConfig& config) {
-  BuiltScene scene;
-  if (config.flume) {
-    const dem::FlumeSpec& flume = *config.flume;
-    dem::add_flume(world, flume, config.structure);
-    if (config.roughness) {
-      const auto& r = *config.roughness;
-      dem::add_bed_roughness(world, r.x0, r.x1, flume.width, r.d_min, r.d_max, r.seed,
-                             config.structure);
-    }
-    if (config.dam) dem::add_grid_dam(world, *config.dam, config.structure);
-    if (config.gate) {
-      const double x = config.gate->x;
-      world.add_gate({x, 0.0, 0.0}, {x, flume.width, 0.0}, {x, flume.width, flume.wall_height},
-                     {x, 0.0, flume.wall_height}, config.structure);
-    }
-  }
-  if (config.box) dem::add_open_box(world, config.box->min, config.box->max, config.structure);
-  if (config.packing) {
-    scene.packing = dem::random_packing(world, *config.packing, config.debris, config.logs);
-  }
-  // Explicit elements are not checked against the packing (the first sub-step reports an
-  // excessive overlap with both element ids).
-  for (const auto& e : config.elements) {
-    const int id =
-        e.log ? world.add_cylinder(e.center, e.axis, 0.5 * e.diameter, e.length, e.material)
-              : world.add_sphere(e.center, 0.5 * e.diameter, e.material);
-    world.set_velocity(id, e.velocity);
-    scene.explicit_elements.push_back(id);
-  }
-  for (const int i : world.moving_elements()) {
-    (world.kind(i) == dem::ElementKind::kCylinder ? scene.log_volume : scene.sphere_volume) +=
-        world.volume(i);
-  }
-  if (config.gate) {
-    const auto start = std::chrono::steady_clock::now();
-    const double settled_speed = dem::settle(world, config.gate->settle_time);
-    scene.settle_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    spdlog::info(
-        "{} spheres and {} logs settled for {} s (largest speed {:.3g} m/s, {:.1f} s wall)",
-        scene.packing.spheres.size(), scene.packing.logs.size(), config.gate->settle_time,
-        settled_speed, scene.settle_seconds);
-    world.set_gate_active(false);
-  }
-  return scene;
-}
-
-// Moving elements with their window-mean fluid force, submerged share and local voidage.
-output::PointFrame make_frame(const dem::DemWorld& world, const std::vector<int>& elements) {
-  output::PointFrame frame;
-  frame.time = world.time();
-  auto& radius = frame.scalars["radius"];
-  auto& length = frame.scalars["length"];
-  auto& submerged = frame.scalars["submerged_fraction"];
-  auto& voidage = frame.scalars["voidage"];
-  auto& velocity = frame.vectors["velocity"];
-  auto& spin = frame.vectors["angular_velocity"];
-  auto& fluid_force = frame.vectors["fluid_force"];  // N, window mean (drag, pressure, added mass)
-  auto& axis = frame.vectors["axis"];
-  auto& kind = frame.labels["kind"];  // 0 sphere, 1 cylinder
-  const auto& moving = world.moving_elements();
-  for (const int element : elements) {
-    const auto slot = std::lower_bound(moving.begin(), moving.end(), element);
-    if (slot == moving.end() || *slot != element) continue;
-    const auto k = static_cast<std::size_t>(slot - moving.begin());
-    frame.positions.push_back(world.position(element));
-    radius.push_back(world.radius(element));
-    length.push_back(world.length(element));
-    submerged.push_back(world.submerged_fraction()[k]);
-    voidage.push_back(world.voidage()[k]);
-    velocity.push_back(world.velocity(element));
-    spin.push_back(world.angular_velocity(element));
-    fluid_force.push_back(world.window_mean_fluid_force()[k]);
-    axis.push_back(world.kind(element) == dem::ElementKind::kCylinder ? world.axis(element)
-                                                                      : Eigen::Vector3d::Zero());
-    kind.push_back(static_cast<int>(world.kind(element)));
-  }
-  return frame;
-}
-
-// Triangles of the structure as points joined by their edges.
-output::PointFrame triangle_frame(const dem::DemWorld& world) {
-  output::PointFrame frame;
-  for (int element = 0; element < world.element_count(); ++element) {
-    if (world.kind(element) != dem::ElementKind::kTriangle) continue;
-    const int first = static_cast<int>(frame.positions.size());
-    for (const auto& vertex : world.triangle_vertices(element)) frame.positions.push_back(vertex);
-    frame.segments.push_back({first, first + 1});
-    frame.segments.push_back({first + 1, first + 2});
-    frame.segments.push_back({first + 2, first});
-  }
-  return frame;
-}
-
-void write_structure(const dem::DemWorld& world, const std::filesystem::path& stem) {
-  output::PointSeriesWriter structure(stem, "debris_dem structure");
-  output::PointFrame fixed;
-  fixed.time = world.time();
-  for (int element = 0; element < world.element_count(); ++element) {
-    if (!world.is_fixed(element) || world.kind(element) == dem::ElementKind::kTriangle) continue;
-    fixed.positions.push_back(world.position(element));
-    fixed.scalars["radius"].push_back(world.radius(element));
-    fixed.scalars["length"].push_back(world.length(element));
-    fixed.vectors["velocity"].push_back(world.velocity(element));
-    fixed.vectors["axis"].push_back(world.kind(element) == dem::ElementKind::kCylinder
-                                        ? world.axis(element)
-                                        : Eigen::Vector3d::Zero());
-    fixed.labels["kind"].push_back(static_cast<int>(world.kind(element)));
-  }
-  structure.write_frame(fixed);
-  structure.write_frame(triangle_frame(world));
-}
 
 // The flow over window [begin, end] as the DEM holds it across its sub-steps: mean velocity,
 // water fraction and surface, and the change of the sampled velocity over the window as Du/Dt
@@ -222,11 +102,13 @@ class Series {
 struct RunTotals {
   int64_t element_substeps = 0;
   double largest_overlap = 0.0;
+  Eigen::Vector3d fluid_impulse = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_fluid_impulse = Eigen::Vector3d::Zero();
 };
 
-std::string finish_report(const dem::DemWorld& world, const dem::DebrisConfig& config,
-                          const BuiltScene& scene, const RunTotals& totals) {
-  coupler::MetricsReport report;
+void finish_report(const dem::DemWorld& world, const dem::DebrisConfig& config,
+                   const dem::BuiltScene& scene, const RunTotals& totals,
+                   coupler::MetricsReport& report) {
   const std::vector<int>& moving = world.moving_elements();
   if (config.dam) {
     report.value("capture_rate_P_V", dem::capture_rate(world, moving, config.dam->x), "");
@@ -266,60 +148,109 @@ std::string finish_report(const dem::DemWorld& world, const dem::DebrisConfig& c
   report.info()["settle_wall_seconds"] = scene.settle_seconds;
   report.info()["largest_overlap_ratio"] = totals.largest_overlap;
   report.info()["list_rebuilds"] = world.list_rebuilds();
-  return report.dump();
+  // Impulse the fluid gave the elements; the last window's reaches the fluid after the run.
+  report.info()["fluid_impulse"] = {totals.fluid_impulse.x(), totals.fluid_impulse.y(),
+                                    totals.fluid_impulse.z()};
+  report.info()["last_window_fluid_impulse"] = {
+      totals.last_fluid_impulse.x(), totals.last_fluid_impulse.y(), totals.last_fluid_impulse.z()};
 }
+
+// The DEM library as a participant: sub-cycles each window in the ambient flow at its moving
+// elements and returns their positions, velocities and the window-mean fluid force.
+class DebrisProcess final : public coupler::Solver {
+ public:
+  explicit DebrisProcess(coupler::ProcessContext& context)
+      : config_(parse(context)),
+        world_(config_.parameters),
+        scene_(dem::build_scene(world_, config_)),
+        debris_(world_.moving_elements()),
+        link_(*context.participant, context.scene, debris_.size()),
+        writer_(context.output_dir() / "debris", "debris_dem"),
+        series_(scene_.explicit_elements),
+        time_offset_(world_.time()) {  // the settling behind a gate comes before the run
+    // The gravity the DEM really uses, so the coupler refuses a scene that differs.
+    context.declare_frame(3, 0.0, config_.parameters.gravity);
+    dem::write_structure(world_, context.output_dir() / "structure");
+    if (config_.reference) {
+      const auto& e = config_.elements.front();
+      const auto& p = config_.parameters;
+      const double ratio = e.material.density / p.fluid_density;
+      double value = 0.0;
+      if (config_.reference->kind == "settling") {
+        value = dem::schiller_naumann_terminal_velocity(
+            e.diameter, e.material.density, p.fluid_density, p.fluid_viscosity, p.gravity.norm());
+      } else {
+        value = e.log ? dem::floating_cylinder_draft(e.diameter, ratio)
+                      : dem::floating_sphere_draft(e.diameter, ratio);
+      }
+      reference_.emplace(*config_.reference, value, 0.5 * e.diameter);
+    }
+  }
+
+  double output_interval() const { return config_.output_interval; }
+  double output_time() const override { return world_.time() - time_offset_; }
+  void write_output() override { writer_.write_frame(dem::make_frame(world_, debris_)); }
+
+  coupler::WindowResult initial_window(const coupler::Window&) override {
+    series_.record(0.0, world_);
+    const std::vector<Eigen::Vector3d> no_force(debris_.size(), Eigen::Vector3d::Zero());
+    link_.publish_state(world_.element_centers(), world_.element_velocities(), no_force);
+    return {};
+  }
+
+  coupler::WindowResult advance(const coupler::Window& window) override {
+    const auto [begin, end] = link_.ambient(window);
+    const dem::FluidAtElements fluid = window_fluid(begin, end, window.dt);
+    const auto step = world_.advance(window.dt, fluid);
+    totals_.element_substeps +=
+        static_cast<int64_t>(step.substeps) * static_cast<int64_t>(debris_.size());
+    totals_.largest_overlap = std::max(totals_.largest_overlap, step.max_overlap_ratio);
+    totals_.last_fluid_impulse.setZero();
+    for (const auto& f : world_.window_mean_fluid_force())
+      totals_.last_fluid_impulse += f * window.dt;
+    totals_.fluid_impulse += totals_.last_fluid_impulse;
+    series_.record(output_time(), world_);
+    if (reference_) {
+      const int element = debris_.front();
+      const double surface =
+          fluid.surface_elevation.empty() ? std::nan("") : fluid.surface_elevation.front();
+      reference_->observe(output_time(), world_.position(element), world_.velocity(element),
+                          surface);
+    }
+    link_.publish_state(world_.element_centers(), world_.element_velocities(),
+                        world_.window_mean_fluid_force());
+    return {step.substeps, 0.0};
+  }
+
+  void finish(coupler::MetricsReport& report) override {
+    series_.write(writer_);
+    finish_report(world_, config_, scene_, totals_, report);
+    if (reference_) reference_->report(report);
+  }
+
+ private:
+  static dem::DebrisConfig parse(coupler::ProcessContext& context) {
+    auto section = context.section();
+    return dem::parse_config(section, context.scene);
+  }
+
+  const dem::DebrisConfig config_;
+  dem::DemWorld world_;
+  const dem::BuiltScene scene_;
+  const std::vector<int> debris_;
+  coupler::SolidLink link_;
+  output::PointSeriesWriter writer_;
+  Series series_;
+  const double time_offset_;
+  RunTotals totals_;
+  std::optional<dem::ElementReference> reference_;
+};
 
 }  // namespace
 
 int main(int argc, char** argv) {
   return coupler::run_process(argc, argv, "debris_dem", [](coupler::ProcessContext& context) {
-    auto section = context.section();
-    const dem::DebrisConfig config = dem::parse_config(section, context.scene.output_interval);
-    // Declare the gravity the DEM really uses (its slope_degrees and gravity_magnitude), so the
-    // coupler refuses a scene whose world gravity differs.
-    context.declare_frame(3, 0.0, config.parameters.gravity);
-    dem::DemWorld world(config.parameters);
-    const BuiltScene scene = build_scene(world, config);
-    const std::vector<int> debris = world.moving_elements();
-
-    auto& participant = *context.participant;
-    const std::size_t moving = debris.size();
-    coupler::SolidLink link(participant, context.scene, moving);
-    output::PointSeriesWriter writer(context.output_dir() / "debris", "debris_dem");
-    write_structure(world, context.output_dir() / "structure");
-    Series series(scene.explicit_elements);
-    const std::vector<Eigen::Vector3d> no_force(moving, Eigen::Vector3d::Zero());
-    const double time_offset = world.time();  // settling time before the run
-    double next_output = 0.0;
-    RunTotals totals;
-    while (true) {
-      const coupler::Window window = participant.next_window();
-      context.maybe_inject_fault(window.index);
-      if (window.finish) {
-        series.write(writer);
-        participant.finished(finish_report(world, config, scene, totals));
-        return;
-      }
-      if (window.index == 0) {
-        writer.write_frame(make_frame(world, debris));
-        series.record(0.0, world);
-        next_output = config.output_interval;
-        link.publish_state(world.element_centers(), world.element_velocities(), no_force);
-        participant.done(0);
-        continue;
-      }
-      const auto [begin, end] = link.ambient(window);
-      const auto step = world.advance(window.dt, window_fluid(begin, end, window.dt));
-      totals.element_substeps += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(moving);
-      totals.largest_overlap = std::max(totals.largest_overlap, step.max_overlap_ratio);
-      series.record(world.time() - time_offset, world);
-      if (world.time() - time_offset >= next_output - 1e-9) {
-        writer.write_frame(make_frame(world, debris));
-        next_output += config.output_interval;
-      }
-      link.publish_state(world.element_centers(), world.element_velocities(),
-                         world.window_mean_fluid_force());
-      participant.done(step.substeps);
-    }
+    DebrisProcess debris(context);
+    coupler::run_solver_loop(context, debris, debris.output_interval());
   });
 }

@@ -3,7 +3,9 @@
 // and key.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -15,13 +17,12 @@ namespace cosim::dem {
 namespace {
 
 std::map<std::string, scenario::ParticipantParser> parsers(std::optional<DebrisConfig>& out) {
-  return {{"debris_dem",
-           [&out](scenario::Section& section, const scenario::Scene& scene) {
-             out = parse_config(section, scene.output_interval);
-           }},
-          {"prescribed_flow", [](scenario::Section& section, const scenario::Scene&) {
-             prescribed_flow::parse_settings(section);
-           }}};
+  return {
+      {"debris_dem", [&out](scenario::Section& section,
+                            const scenario::Scene& scene) { out = parse_config(section, scene); }},
+      {"prescribed_flow", [](scenario::Section& section, const scenario::Scene&) {
+         prescribed_flow::parse_settings(section);
+       }}};
 }
 
 std::filesystem::path write_scene(const std::string& body) {
@@ -56,6 +57,9 @@ TEST(DemConfig, ExistingFlumeScenesKeepTheSeed004Model) {
     // The domain of the flume scenes as before: far downstream and down, 1 m sideways.
     EXPECT_EQ(p.domain_min, Eigen::Vector3d(-1.0, -1.0, -100.0));
     EXPECT_EQ(p.domain_max.x(), config->flume->length + 100.0);
+    // The flume's 15 degrees come from the scene's world: g (sin, 0, -cos).
+    EXPECT_NEAR(p.gravity.x(), 9.81 * std::sin(15.0 * std::numbers::pi / 180.0), 1e-12);
+    EXPECT_NEAR(p.gravity.z(), -9.81 * std::cos(15.0 * std::numbers::pi / 180.0), 1e-12);
   }
 }
 

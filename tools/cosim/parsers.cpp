@@ -17,7 +17,7 @@ const std::map<std::string, scenario::ParticipantParser>& participant_parsers() 
        [](scenario::Section& section, const scenario::Scene&) { replay::parse_settings(section); }},
       {"debris_dem",
        [](scenario::Section& section, const scenario::Scene& scene) {
-         dem::parse_config(section, scene.output_interval);
+         dem::parse_config(section, scene);
        }},
       {"fluid_mps",
        [](scenario::Section& section, const scenario::Scene& scene) {

@@ -1,0 +1,123 @@
+#include "element_reference.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "cosim/debris_dem/fluid_forces.hpp"
+
+namespace cosim::dem {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Root of a monotone increasing f on [low, high] by bisection (f(low) < 0 < f(high)).
+template <class F>
+double bisect(F f, double low, double high) {
+  for (int i = 0; i < 200 && high - low > 1e-15 * std::max(1.0, high); ++i) {
+    const double mid = 0.5 * (low + high);
+    (f(mid) < 0.0 ? low : high) = mid;
+  }
+  return 0.5 * (low + high);
+}
+
+double mean_from(const std::vector<double>& times, const std::vector<double>& values, double from) {
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    if (times[i] < from) continue;
+    sum += values[i];
+    ++count;
+  }
+  return count > 0 ? sum / count : std::nan("");
+}
+
+}  // namespace
+
+double schiller_naumann_terminal_velocity(double diameter, double solid_density,
+                                          double fluid_density, double viscosity, double gravity) {
+  if (!(solid_density > fluid_density)) {
+    throw std::invalid_argument("terminal velocity: the sphere is not heavier than the liquid");
+  }
+  const double volume = kPi * diameter * diameter * diameter / 6.0;
+  const double area = 0.25 * kPi * diameter * diameter;
+  const double weight = (solid_density - fluid_density) * gravity * volume;
+  auto excess_drag = [&](double v) {
+    const double reynolds = fluid_density * v * diameter / viscosity;
+    return 0.5 * fluid_density * schiller_naumann_drag_coefficient(reynolds) * area * v * v -
+           weight;
+  };
+  double high = 1.0;
+  while (excess_drag(high) < 0.0) high *= 2.0;
+  return bisect(excess_drag, 1e-12, high);
+}
+
+double floating_cylinder_draft(double diameter, double density_ratio) {
+  if (!(density_ratio > 0.0 && density_ratio < 1.0)) {
+    throw std::invalid_argument("floating draft: the density ratio must lie in (0, 1)");
+  }
+  const double theta = bisect(
+      [&](double t) { return (t - std::sin(t)) / (2.0 * kPi) - density_ratio; }, 0.0, 2.0 * kPi);
+  return 0.5 * diameter * (1.0 - std::cos(0.5 * theta));
+}
+
+double floating_sphere_draft(double diameter, double density_ratio) {
+  const double r = 0.5 * diameter;
+  return bisect([&](double h) { return sphere_submerged_fraction(r, r, h) - density_ratio; }, 0.0,
+                diameter);
+}
+
+ElementReference::ElementReference(ElementReferenceSettings settings, double reference_value,
+                                   double radius)
+    : settings_(std::move(settings)), reference_(reference_value), radius_(radius) {}
+
+void ElementReference::observe(double time, const Eigen::Vector3d& center,
+                               const Eigen::Vector3d& velocity, double surface) {
+  times_.push_back(time);
+  heights_.push_back(center.z());
+  vertical_.push_back(velocity.z());
+  drafts_.push_back(std::isfinite(surface) ? surface - (center.z() - radius_) : std::nan(""));
+}
+
+void ElementReference::report(coupler::MetricsReport& report) const {
+  if (settings_.kind == "settling") report_settling(report);
+  if (settings_.kind == "floating") report_floating(report);
+}
+
+void ElementReference::report_settling(coupler::MetricsReport& report) const {
+  // The settling speed once the transient has passed (the mean over the averaging window).
+  const double speed = -mean_from(times_, vertical_, settings_.average_from);
+  report.compare("terminal_velocity", speed, reference_, "m/s",
+                 "Schiller & Naumann (1933) drag, the same sphere and liquid, unbounded");
+  double fastest = 0.0;
+  for (const double w : vertical_) fastest = std::max(fastest, -w);
+  report.value("fastest_settling_speed", fastest, "m/s");
+}
+
+void ElementReference::report_floating(coupler::MetricsReport& report) const {
+  report.compare("draft", mean_from(times_, drafts_, settings_.average_from), reference_, "m",
+                 "Archimedes: submerged share equals the density ratio");
+  // Heave: successive maxima of z after the first contact with the water; their ratio is the
+  // decay per period.
+  std::vector<double> peaks, peak_times;
+  for (std::size_t i = 1; i + 1 < heights_.size(); ++i) {
+    if (!std::isfinite(drafts_[i]) || drafts_[i] <= 0.0) continue;
+    if (heights_[i] > heights_[i - 1] && heights_[i] >= heights_[i + 1]) {
+      peaks.push_back(heights_[i]);
+      peak_times.push_back(times_[i]);
+    }
+  }
+  const double final_height = heights_.empty() ? 0.0 : heights_.back();
+  if (peaks.size() >= 2) {
+    const double first = peaks[0] - final_height, second = peaks[1] - final_height;
+    report.value("heave_decay_ratio", first != 0.0 ? second / first : 0.0, "");
+    report.value("heave_period", peak_times[1] - peak_times[0], "s");
+  }
+  report.info()["heave_peaks"] = peaks.size();
+}
+
+}  // namespace cosim::dem
