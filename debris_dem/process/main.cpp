@@ -103,7 +103,8 @@ struct RunTotals {
   int64_t element_substeps = 0;
   double largest_overlap = 0.0;
   Eigen::Vector3d fluid_impulse = Eigen::Vector3d::Zero();
-  Eigen::Vector3d last_fluid_impulse = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_fluid_impulse = Eigen::Vector3d::Zero();  // interaction, last window
+  Eigen::Vector3d interaction_impulse = Eigen::Vector3d::Zero();
 };
 
 void finish_report(const dem::DemWorld& world, const dem::DebrisConfig& config,
@@ -205,10 +206,12 @@ class DebrisProcess final : public coupler::Solver {
     totals_.element_substeps +=
         static_cast<int64_t>(step.substeps) * static_cast<int64_t>(debris_.size());
     totals_.largest_overlap = std::max(totals_.largest_overlap, step.max_overlap_ratio);
+    for (const auto& f : world_.window_mean_fluid_force()) totals_.fluid_impulse += f * window.dt;
     totals_.last_fluid_impulse.setZero();
-    for (const auto& f : world_.window_mean_fluid_force())
+    for (const auto& f : world_.window_mean_interaction_force()) {
       totals_.last_fluid_impulse += f * window.dt;
-    totals_.fluid_impulse += totals_.last_fluid_impulse;
+    }
+    totals_.interaction_impulse += totals_.last_fluid_impulse;
     series_.record(output_time(), world_);
     if (reference_) {
       const int element = debris_.front();
@@ -217,8 +220,10 @@ class DebrisProcess final : public coupler::Solver {
       reference_->observe(output_time(), world_.position(element), world_.velocity(element),
                           surface);
     }
+    // The fluid takes back the interaction force (drag, added mass), not the buoyancy its own
+    // pressure already carries (DemWorld::window_mean_interaction_force).
     link_.publish_state(world_.element_centers(), world_.element_velocities(),
-                        world_.window_mean_fluid_force());
+                        world_.window_mean_interaction_force());
     return {step.substeps, 0.0};
   }
 

@@ -132,7 +132,8 @@ void DemWorld::apply_fluid(const FluidAtElements& fluid) {
     // water depth); buoyancy is the hydrostatic part of -V_sub grad p.
     const Eigen::Vector3d relative = fluid.velocity[k] - e.velocity;
     const double volume = e.mass / materials_[e.material].density;
-    Eigen::Vector3d fluid_force = fraction * (drag_force(k, relative) - rho * volume * p.gravity);
+    const Eigen::Vector3d drag = fraction * drag_force(k, relative);
+    Eigen::Vector3d fluid_force = drag - fraction * rho * volume * p.gravity;
     const double submerged_volume = fraction * volume;
     if (p.fluid_acceleration_force) {
       fluid_force += rho * submerged_volume * fluid_acceleration_[k];
@@ -146,6 +147,7 @@ void DemWorld::apply_fluid(const FluidAtElements& fluid) {
     }
     force_[moving_[k]] += fluid_force;
     mean_fluid_force_[k] += fluid_force;
+    mean_interaction_force_[k] += drag;
   }
 }
 
@@ -170,7 +172,9 @@ Eigen::Vector3d DemWorld::added_mass_acceleration(int k) {
   const Eigen::Vector3d acceleration =
       total_along / (e.mass + axial_mass) + total_across / (e.mass + normal_mass);
   const auto [slip_along, slip_across] = split(fluid_acceleration - acceleration);
-  mean_fluid_force_[k] += axial_mass * slip_along + normal_mass * slip_across;
+  const Eigen::Vector3d added_mass_force = axial_mass * slip_along + normal_mass * slip_across;
+  mean_fluid_force_[k] += added_mass_force;
+  mean_interaction_force_[k] += added_mass_force;
   return acceleration;
 }
 
@@ -182,6 +186,7 @@ WindowReport DemWorld::advance(double window_dt, const FluidAtElements& fluid) {
   const int substeps = std::max(1, static_cast<int>(std::ceil(window_dt / target - 1e-9)));
   const double dt = window_dt / substeps;
   for (auto& f : mean_fluid_force_) f.setZero();
+  for (auto& f : mean_interaction_force_) f.setZero();
   if (!with_fluid) std::fill(submerged_fraction_.begin(), submerged_fraction_.end(), 0.0);
   if (with_fluid && parameters_.voidage_correction) update_voidage();
   window_max_overlap_ = 0.0;
@@ -195,6 +200,7 @@ WindowReport DemWorld::advance(double window_dt, const FluidAtElements& fluid) {
     check_stability();
   }
   for (auto& f : mean_fluid_force_) f /= substeps;
+  for (auto& f : mean_interaction_force_) f /= substeps;
   WindowReport report;
   report.substeps = substeps;
   report.substep = dt;

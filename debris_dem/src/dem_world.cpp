@@ -52,6 +52,7 @@ int DemWorld::add_element(Element element, const Eigen::Vector3d& anchor,
     element.inverse_mass = 1.0 / element.mass;
     moving_.push_back(static_cast<int>(elements_.size()));
     mean_fluid_force_.emplace_back(Eigen::Vector3d::Zero());
+    mean_interaction_force_.emplace_back(Eigen::Vector3d::Zero());
     submerged_fraction_.push_back(0.0);
     voidage_.push_back(1.0);
     added_mass_normal_.push_back(0.0);

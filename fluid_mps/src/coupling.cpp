@@ -118,8 +118,9 @@ void FluidSystem::sample_surface(const std::vector<Eigen::Vector3d>& points, dou
     box.min().x() = periodic.x_min;
     box.max().x() = periodic.x_max;
   }
-  // Highest fluid particle per column l0 wide, then the highest column within the radius of each
-  // point (across the seam of a periodic run; the drop of a stepped period is not applied).
+  // Highest fluid particle per column l0 wide, then the mean over the wet columns within the
+  // radius of each point (a lone splashed particle moves it by l0 / columns, not by its height;
+  // across the seam of a periodic run; the drop of a stepped period is not applied).
   const Eigen::Vector2d origin = box.min();
   const int nx = std::max(1, static_cast<int>(std::ceil((box.max().x() - origin.x()) / l0)));
   const int ny = planar ? 1 : static_cast<int>((box.max().y() - origin.y()) / l0) + 1;
@@ -138,7 +139,8 @@ void FluidSystem::sample_surface(const std::vector<Eigen::Vector3d>& points, dou
     const Eigen::Vector2d p = horizontal(points[q]);
     const int cx = static_cast<int>(std::floor((p.x() - origin.x()) / l0));
     const int cy = static_cast<int>(std::floor((p.y() - origin.y()) / l0));
-    double highest = kNoWater;
+    double top_sum = 0.0;
+    int columns = 0;
     for (int dy = -reach_y; dy <= reach_y; ++dy) {
       for (int dx = -reach; dx <= reach; ++dx) {
         const int y = cy + dy;
@@ -151,10 +153,13 @@ void FluidSystem::sample_surface(const std::vector<Eigen::Vector3d>& points, dou
         const double gap_y =
             planar ? 0.0 : std::max(0.0, std::abs(origin.y() + (y + 0.5) * l0 - p.y()) - 0.5 * l0);
         if (gap_x * gap_x + gap_y * gap_y > radius * radius) continue;
-        highest = std::max(highest, top[static_cast<std::size_t>(y) * nx + x]);
+        const double column_top = top[static_cast<std::size_t>(y) * nx + x];
+        if (column_top == kNoWater) continue;
+        top_sum += column_top;
+        ++columns;
       }
     }
-    if (highest > kNoWater) surface[q] = highest + 0.5 * l0;
+    if (columns > 0) surface[q] = top_sum / columns + 0.5 * l0;
   }
 }
 

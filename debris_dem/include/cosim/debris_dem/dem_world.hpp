@@ -187,6 +187,15 @@ class DemWorld {
   [[nodiscard]] const std::vector<Eigen::Vector3d>& window_mean_fluid_force() const {
     return mean_fluid_force_;
   }
+  // The part of it the fluid takes back: drag and added mass, window mean [N]. The pressure-
+  // gradient force (buoyancy, -V grad p) is the fluid's own pressure on the volume the element
+  // occupies; the unresolved fluid still fills that volume (no voidage in its equations), so
+  // its pressure already carries it, and feeding it back would count it twice (a floating log
+  // then sinks, pushing its share of fluid down with it). Zhou et al., J. Fluid Mech. 661 (2010)
+  // 482-510, model B: the fluid-particle coupling term excludes the pressure-gradient force.
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& window_mean_interaction_force() const {
+    return mean_interaction_force_;
+  }
   // Submerged share of each moving element at the last sub-step (0 without fluid).
   [[nodiscard]] const std::vector<double>& submerged_fraction() const {
     return submerged_fraction_;
@@ -265,7 +274,8 @@ class DemWorld {
   std::vector<Eigen::Vector3d> force_;
   std::vector<Eigen::Vector3d> torque_;
   // Per moving element.
-  std::vector<Eigen::Vector3d> mean_fluid_force_;  // summed over sub-steps, then the mean
+  std::vector<Eigen::Vector3d> mean_fluid_force_;        // summed over sub-steps, then the mean
+  std::vector<Eigen::Vector3d> mean_interaction_force_;  // drag + added mass, likewise
   std::vector<double> submerged_fraction_;
   std::vector<double> voidage_;
   std::vector<double> added_mass_normal_;            // kg, rho_f V_sub C (spheres: all directions)

@@ -94,9 +94,9 @@ class FluidSystem {
                                                std::vector<double>* water_fraction = nullptr) const;
 
   // Free-surface height above each point: the vertical coordinate (y in 2D, z in 3D) of the
-  // highest fluid particle within a horizontal distance `radius` of the point, plus l0 / 2 (the
-  // particle's own extent). -inf where no fluid lies in that column. A solid computes its
-  // submerged volume from it.
+  // highest fluid particle of each column l0 wide, averaged over the wet columns within a
+  // horizontal distance `radius` of the point, plus l0 / 2 (the particle's own extent). -inf
+  // where no fluid lies within reach. A solid computes its submerged volume from it.
   void sample_surface(const std::vector<Eigen::Vector3d>& points, double radius,
                       std::vector<double>& surface) const;
 
