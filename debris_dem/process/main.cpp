@@ -152,8 +152,11 @@ void finish_report(const dem::DemWorld& world, const dem::DebrisConfig& config,
   // Impulse the fluid gave the elements; the last window's reaches the fluid after the run.
   report.info()["fluid_impulse"] = {totals.fluid_impulse.x(), totals.fluid_impulse.y(),
                                     totals.fluid_impulse.z()};
-  report.info()["last_window_fluid_impulse"] = {
-      totals.last_fluid_impulse.x(), totals.last_fluid_impulse.y(), totals.last_fluid_impulse.z()};
+  // The drag and added-mass part, which the fluid takes back (one window later).
+  const auto& taken = totals.interaction_impulse;
+  const auto& last = totals.last_fluid_impulse;
+  report.info()["interaction_impulse"] = {taken.x(), taken.y(), taken.z()};
+  report.info()["last_window_interaction_impulse"] = {last.x(), last.y(), last.z()};
 }
 
 // The DEM library as a participant: sub-cycles each window in the ambient flow at its moving

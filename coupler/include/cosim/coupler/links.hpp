@@ -76,8 +76,9 @@ class FlowLink {
                        std::span<const double> water_fraction,
                        std::span<const double> surface_elevation = {});
 
-  // World impulse [N s] of every reaction handed to the flow so far (the flow applies it over
-  // each window: reaction * dt summed), and the part a 2D flow has no place for (along y).
+  // World impulse [N s] of every reaction handed to the flow so far, in its plane (the flow
+  // applies it over each window: reaction * dt summed), and the part a 2D flow has no place for
+  // (along y). Their sum is minus the solids' drag impulse (one window later).
   const Eigen::Vector3d& booked_impulse() const { return booked_impulse_; }
   const Eigen::Vector3d& out_of_plane_impulse() const { return out_of_plane_impulse_; }
   const SolverFrame& frame() const { return frame_; }
