@@ -250,26 +250,38 @@ DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& sce
   if (section.has("reference")) {
     auto reference = section.child("reference");
     ElementReferenceSettings r;
-    r.kind = reference.choice("kind", {"settling", "floating"});
-    if (config.elements.size() != 1 || config.packing) {
-      reference.fail("kind", "a " + r.kind + " reference needs exactly one element and no packing");
+    r.kind = reference.choice("kind", {"settling", "floating", "hindered"});
+    if (r.kind == "hindered") {
+      if (!config.packing || !config.elements.empty() || config.packing->log_count > 0 ||
+          config.sphere_classes.size() != 1 || p.drag_law != DragLaw::kSchillerNaumann) {
+        reference.fail("kind",
+                       "hindered settling needs a packing of one sphere class, no logs, no "
+                       "explicit elements, and drag_law: schiller_naumann");
+      }
+      r.average_from = reference.number("average_from", 0.0, Range::non_negative());
+      config.reference = r;
+    } else {
+      if (config.elements.size() != 1 || config.packing) {
+        reference.fail("kind",
+                       "a " + r.kind + " reference needs exactly one element and no packing");
+      }
+      if (r.kind == "settling" && p.drag_law != DragLaw::kSchillerNaumann) {
+        reference.fail("kind",
+                       "the settling reference is the Schiller-Naumann terminal velocity: "
+                       "set drag_law: schiller_naumann");
+      }
+      const double ratio = config.elements.front().material.density / p.fluid_density;
+      if (r.kind == "settling" && !(ratio > 1.0)) {
+        reference.fail("kind",
+                       "the element does not sink (density ratio " + std::to_string(ratio) + ")");
+      }
+      if (r.kind == "floating" && !(ratio > 0.0 && ratio < 1.0)) {
+        reference.fail("kind",
+                       "the element does not float (density ratio " + std::to_string(ratio) + ")");
+      }
+      r.average_from = reference.number("average_from", 0.0, Range::non_negative());
+      config.reference = r;
     }
-    if (r.kind == "settling" && p.drag_law != DragLaw::kSchillerNaumann) {
-      reference.fail("kind",
-                     "the settling reference is the Schiller-Naumann terminal velocity: "
-                     "set drag_law: schiller_naumann");
-    }
-    const double ratio = config.elements.front().material.density / p.fluid_density;
-    if (r.kind == "settling" && !(ratio > 1.0)) {
-      reference.fail("kind",
-                     "the element does not sink (density ratio " + std::to_string(ratio) + ")");
-    }
-    if (r.kind == "floating" && !(ratio > 0.0 && ratio < 1.0)) {
-      reference.fail("kind",
-                     "the element does not float (density ratio " + std::to_string(ratio) + ")");
-    }
-    r.average_from = reference.number("average_from", 0.0, Range::non_negative());
-    config.reference = r;
   }
   return config;
 }

@@ -29,7 +29,7 @@ double mean_from(const std::vector<double>& times, const std::vector<double>& va
   double sum = 0.0;
   int count = 0;
   for (std::size_t i = 0; i < times.size(); ++i) {
-    if (times[i] < from) continue;
+    if (times[i] < from || !std::isfinite(values[i])) continue;
     sum += values[i];
     ++count;
   }
@@ -99,7 +99,13 @@ void ElementReference::report_settling(coupler::MetricsReport& report) const {
 }
 
 void ElementReference::report_floating(coupler::MetricsReport& report) const {
-  report.compare("draft", mean_from(times_, drafts_, settings_.average_from), reference_, "m",
+  const double draft = mean_from(times_, drafts_, settings_.average_from);
+  if (!std::isfinite(draft)) {
+    // Out of the water (or no water below it) over the whole averaging window.
+    report.info()["draft_problem"] = "the element was never afloat after average_from";
+    return;
+  }
+  report.compare("draft", draft, reference_, "m",
                  "Archimedes: submerged share equals the density ratio");
   // Heave: successive maxima of z after the first contact with the water; their ratio is the
   // decay per period.
@@ -118,6 +124,38 @@ void ElementReference::report_floating(coupler::MetricsReport& report) const {
     report.value("heave_period", peak_times[1] - peak_times[0], "s");
   }
   report.info()["heave_peaks"] = peaks.size();
+}
+
+double richardson_zaki_exponent(double re) {
+  if (re < 0.2) return 4.65;
+  if (re < 1.0) return 4.4 * std::pow(re, -0.03);
+  if (re < 500.0) return 4.4 * std::pow(re, -0.1);
+  return 2.4;
+}
+
+SuspensionReference::SuspensionReference(double average_from, double phi, double terminal_velocity,
+                                         double terminal_reynolds)
+    : average_from_(average_from),
+      phi_(phi),
+      terminal_velocity_(terminal_velocity),
+      reynolds_(terminal_reynolds) {}
+
+void SuspensionReference::observe(double time, const Eigen::Vector3d& mean_velocity) {
+  if (time < average_from_) return;
+  sum_ -= mean_velocity.z();
+  ++count_;
+}
+
+void SuspensionReference::report(coupler::MetricsReport& report) const {
+  const double n = richardson_zaki_exponent(reynolds_);
+  const double speed = count_ > 0 ? sum_ / count_ : std::nan("");
+  report.compare("hindered_settling_velocity", speed, terminal_velocity_ * std::pow(1.0 - phi_, n),
+                 "m/s",
+                 fmt::format("Richardson & Zaki (1954), phi = {:.4g}, n = {:.3g} at Re_t = {:.3g}",
+                             phi_, n, reynolds_));
+  report.value("settling_over_terminal_velocity", speed / terminal_velocity_, "");
+  report.info()["solid_fraction"] = phi_;
+  report.info()["single_sphere_terminal_velocity"] = terminal_velocity_;
 }
 
 }  // namespace cosim::dem

@@ -25,7 +25,7 @@ double floating_cylinder_draft(double diameter, double density_ratio);
 double floating_sphere_draft(double diameter, double density_ratio);
 
 struct ElementReferenceSettings {
-  std::string kind;           // settling | floating
+  std::string kind;           // settling | floating | hindered
   double average_from = 0.0;  // [s] time averages start here
 };
 
@@ -49,6 +49,28 @@ class ElementReference {
   double reference_;
   double radius_;
   std::vector<double> times_, heights_, vertical_, drafts_;
+};
+
+// Richardson & Zaki (1954) exponent n of v = v_t (1 - phi)^n, without wall correction
+// (settling_and_floating.md): 4.65 below Re_t 0.2, 4.4 Re_t^-0.03 to 1, 4.4 Re_t^-0.1 to 500,
+// 2.4 above.
+double richardson_zaki_exponent(double terminal_reynolds);
+
+// A suspension of equal spheres settling in a closed column: the volume-weighted mean settling
+// velocity against Richardson & Zaki, v_t (1 - phi)^n with v_t the Schiller-Naumann terminal
+// velocity of one sphere.
+class SuspensionReference {
+ public:
+  // phi: the solids' volume over the volume of the suspension they start in.
+  SuspensionReference(double average_from, double phi, double terminal_velocity,
+                      double terminal_reynolds);
+  void observe(double time, const Eigen::Vector3d& mean_velocity);
+  void report(coupler::MetricsReport& report) const;
+
+ private:
+  double average_from_, phi_, terminal_velocity_, reynolds_;
+  double sum_ = 0.0;
+  int count_ = 0;
 };
 
 }  // namespace cosim::dem

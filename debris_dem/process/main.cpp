@@ -175,7 +175,17 @@ class DebrisProcess final : public coupler::Solver {
     // The gravity the DEM really uses, so the coupler refuses a scene that differs.
     context.declare_frame(3, 0.0, config_.parameters.gravity);
     dem::write_structure(world_, context.output_dir() / "structure");
-    if (config_.reference) {
+    if (config_.reference && config_.reference->kind == "hindered") {
+      const auto& p = config_.parameters;
+      const auto& packing = *config_.packing;
+      const double d = config_.sphere_classes.front().diameter;
+      const double rho_s = config_.debris.density;
+      const double v_t = dem::schiller_naumann_terminal_velocity(
+          d, rho_s, p.fluid_density, p.fluid_viscosity, p.gravity.norm());
+      const double phi = scene_.sphere_volume / (packing.box_max - packing.box_min).prod();
+      suspension_.emplace(config_.reference->average_from, phi, v_t,
+                          p.fluid_density * v_t * d / p.fluid_viscosity);
+    } else if (config_.reference) {
       const auto& e = config_.elements.front();
       const auto& p = config_.parameters;
       const double ratio = e.material.density / p.fluid_density;
@@ -216,6 +226,7 @@ class DebrisProcess final : public coupler::Solver {
     }
     totals_.interaction_impulse += totals_.last_fluid_impulse;
     series_.record(output_time(), world_);
+    if (suspension_) suspension_->observe(output_time(), mean_velocity(world_));
     if (reference_) {
       const int element = debris_.front();
       const double surface =
@@ -234,6 +245,7 @@ class DebrisProcess final : public coupler::Solver {
     series_.write(writer_);
     finish_report(world_, config_, scene_, totals_, report);
     if (reference_) reference_->report(report);
+    if (suspension_) suspension_->report(report);
   }
 
  private:
@@ -252,6 +264,7 @@ class DebrisProcess final : public coupler::Solver {
   const double time_offset_;
   RunTotals totals_;
   std::optional<dem::ElementReference> reference_;
+  std::optional<dem::SuspensionReference> suspension_;
 };
 
 }  // namespace

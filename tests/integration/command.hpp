@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 namespace cosim::testing {
@@ -29,5 +30,10 @@ nlohmann::json read_summary(const std::filesystem::path& run_dir);
 std::filesystem::path fresh_folder(const std::string& name);
 
 std::filesystem::path test_scene(const std::string& name);
+
+// A JSON array of three numbers (an impulse in summary.json) as a vector.
+inline Eigen::Vector3d vector_of(const nlohmann::json& values) {
+  return {values[0].get<double>(), values[1].get<double>(), values[2].get<double>()};
+}
 
 }  // namespace cosim::testing

@@ -11,10 +11,6 @@
 namespace cosim::testing {
 namespace {
 
-Eigen::Vector3d vector_of(const nlohmann::json& values) {
-  return {values[0].get<double>(), values[1].get<double>(), values[2].get<double>()};
-}
-
 // The world impulses of a fluid + plants run: what the link handed the fluid, what its particles
 // received, and what could not be delivered, against the impulse the plants took.
 void expect_momentum_balance(const std::string& extra_options, const std::string& label) {

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <fstream>
+#include <functional>
 #include <future>
 
 #include "command.hpp"
@@ -170,23 +171,30 @@ TEST(Runs, ReplayDrivesTheBeamBitForBit) {
   EXPECT_NE(replayed.output.find("1 output files"), std::string::npos) << replayed.output;
 }
 
-TEST(Runs, ReplayDetectsADifferentSolver) {
-  const auto runs = fresh_folder("replay-diff");
+// Records a blade run, edits its resolved scenario with `edit`, and replays the beam against it.
+CommandResult replay_edited_blade(const std::string& label,
+                                  const std::function<void(YAML::Node&)>& edit) {
+  const auto runs = fresh_folder(label);
   const auto recorded =
       run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
-  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
+  EXPECT_EQ(recorded.exit_code, 0) << recorded.output;
   const auto run_dir = run_folder_of(recorded);
-  // Change the beam's physics in the recorded scenario: the replay must notice.
   const auto scenario_file = run_dir / "scenario.yaml";
   auto document = scenario::load_yaml_file(scenario_file);
-  document["participants"]["vegetation_beam"]["drag_coefficient"] = 1.0;
+  edit(document);
   {
     std::ofstream out(scenario_file);
     out << document;
   }
-  const auto replayed =
-      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
-                            run_dir.string(), runs.string()));
+  return run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                               run_dir.string(), runs.string()));
+}
+
+TEST(Runs, ReplayDetectsADifferentSolver) {
+  // Change the beam's physics in the recorded scenario: the replay must notice.
+  const auto replayed = replay_edited_blade("replay-diff", [](YAML::Node& document) {
+    document["participants"]["vegetation_beam"]["drag_coefficient"] = 1.0;
+  });
   EXPECT_EQ(replayed.exit_code, 1) << replayed.output;
   EXPECT_NE(replayed.output.find("DIFFERENT"), std::string::npos) << replayed.output;
 }
@@ -194,21 +202,9 @@ TEST(Runs, ReplayDetectsADifferentSolver) {
 // One world: a recorded flow replayed into a scene whose world is tilted no longer shares the
 // beam's gravity. The coupler refuses at the handshake, naming both participants.
 TEST(Runs, ReplayIntoAnotherWorldIsRefusedAtTheHandshake) {
-  const auto runs = fresh_folder("replay-world");
-  const auto recorded =
-      run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
-  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
-  const auto run_dir = run_folder_of(recorded);
-  const auto scenario_file = run_dir / "scenario.yaml";
-  auto document = scenario::load_yaml_file(scenario_file);
-  document["world"] = YAML::Load("{slope_degrees: 5}");
-  {
-    std::ofstream out(scenario_file);
-    out << document;
-  }
-  const auto replayed =
-      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
-                            run_dir.string(), runs.string()));
+  const auto replayed = replay_edited_blade("replay-world", [](YAML::Node& document) {
+    document["world"] = YAML::Load("{slope_degrees: 5}");
+  });
   EXPECT_NE(replayed.exit_code, 0) << replayed.output;
   EXPECT_NE(replayed.output.find("participants disagree on the world"), std::string::npos)
       << replayed.output;

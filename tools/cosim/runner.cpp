@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
@@ -176,17 +177,21 @@ void print_report(const std::filesystem::path& run_dir) {
                participant["steps"].get<int64_t>());
     const auto& report = participant["report"];
     if (!report.contains("metrics")) continue;
+    // A metric the run could not measure (NaN, stored as null) prints as nan, never throws.
+    auto number = [](const nlohmann::json& v) {
+      return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN();
+    };
     for (const auto& [metric, value] : report["metrics"].items()) {
       if (value.contains("reference")) {
         fmt::print("    {:<28} {:>12.5g} {:<6} reference {:>12.5g}  error {:>7.3f} %  ({})\n",
-                   metric, value["value"].get<double>(), value.value("unit", ""),
-                   value["reference"].get<double>(), 100.0 * value["relative_error"].get<double>(),
+                   metric, number(value["value"]), value.value("unit", ""),
+                   number(value["reference"]), 100.0 * number(value["relative_error"]),
                    value.value("reference_source", ""));
       } else if (value.contains("reference_source")) {
-        fmt::print("    {:<28} {:>12.5g} {:<6} against {}\n", metric, value["value"].get<double>(),
-                   value.value("unit", ""), value["reference_source"].get<std::string>());
+        fmt::print("    {:<28} {:>12.5g} {:<6} against {}\n", metric, number(value["value"]),
+                   value.value("unit", ""), value.value("reference_source", ""));
       } else {
-        fmt::print("    {:<28} {:>12.5g} {}\n", metric, value["value"].get<double>(),
+        fmt::print("    {:<28} {:>12.5g} {}\n", metric, number(value["value"]),
                    value.value("unit", ""));
       }
     }
