@@ -76,7 +76,6 @@ void measure(int points, int windows, const std::string& scheme, int64_t run_id)
   coupler::CouplerOptions coupler_options;
   coupler_options.url = url;
   coupler_options.run_id = run_id;
-  coupler_options.show_progress = false;
   coupler::Coupler coupler(scene, coupler_options);
   coupler::ProcessGroup none;
   std::thread flow(run_flow, std::cref(scene), url, run_id);

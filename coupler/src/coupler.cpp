@@ -10,8 +10,6 @@
 #include <cmath>
 #include <thread>
 
-#include <unistd.h>
-#include <cstdio>
 
 namespace cosim::coupler {
 
@@ -189,23 +187,10 @@ void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
   }
 }
 
-void Coupler::show_progress(int64_t index, double time, bool force) {
-  if (!options_.show_progress) return;
-  // A terminal gets one line updated every second; a log file a new line every 10 s.
-  static const bool terminal = isatty(fileno(stderr));
-  if (!force && seconds_since(last_progress_) < (terminal ? 1.0 : 10.0)) return;
-  last_progress_ = Clock::now();
-  const int64_t total = scene_.total_windows();
-  fmt::print(stderr, "{}[{}] window {}/{}  t = {:.4f} s of {:.4f} s  wall {:.1f} s   {}",
-             terminal ? "\r" : "", scene_.name, index, total, time, scene_.duration,
-             seconds_since(started_), terminal && !force ? "" : "\n");
-}
-
 RunResult Coupler::run(ProcessGroup& processes) {
   RunResult result;
   result.total_windows = scene_.total_windows();
   started_ = Clock::now();
-  last_progress_ = started_;
   double time = 0.0;
   int64_t index = 0;
   try {
@@ -228,17 +213,14 @@ RunResult Coupler::run(ProcessGroup& processes) {
                  ? time + dt
                  : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
       result.windows_completed = index;
-      show_progress(index, time, false);
       if (scene_.coupling.adaptive_window && index == result.total_windows &&
           time < scene_.duration * (1 - 1e-12)) {
         ++result.total_windows;  // adaptive windows may need more than the nominal count
       }
     }
-    show_progress(result.windows_completed, time, true);
     finish(processes, result.windows_completed + 1, time);
     result.ok = true;
   } catch (const Failure& failure) {
-    if (options_.show_progress) fmt::print(stderr, "\n");
     result.failure = failure.what();
     for (int repeat = 0; repeat < 3; ++repeat) {
       bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_ABORT, scene_.total_windows(),

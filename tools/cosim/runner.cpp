@@ -86,8 +86,8 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   options.run_id = run_id;
   options.event_log = outcome.run_dir / "events.lcmlog";
   options.loss_probability = request.loss_probability;
-  // The progress lines (with an estimate of the time left) come from our own monitor.
-  options.show_progress = false;
+  // The progress lines (with an estimate of the time left) come from the monitor below, which
+  // listens to the coupler's window broadcasts.
   coupler::Coupler coupler(scene, options);
   std::optional<ProgressMonitor> progress;
   if (request.show_progress) {

@@ -21,7 +21,6 @@ struct CouplerOptions {
   std::filesystem::path event_log;  // every message heard is recorded here
   double loss_probability = 0.0;
   double startup_timeout = 60.0;  // seconds for every participant to become ready
-  bool show_progress = true;
 };
 
 struct ParticipantReport {
@@ -74,7 +73,6 @@ class Coupler {
   void finish(ProcessGroup& processes, int64_t index, double time);
   void check_processes(ProcessGroup& processes, const std::string& during);
   void check_silence(const std::vector<std::string>& pending, const std::string& during);
-  void show_progress(int64_t index, double time, bool force);
 
   const scenario::Scene& scene_;
   CouplerOptions options_;
@@ -83,7 +81,6 @@ class Coupler {
   std::map<std::string, ParticipantReport> reports_;
   double next_stable_dt_ = 0.0;
   std::chrono::steady_clock::time_point started_;
-  std::chrono::steady_clock::time_point last_progress_;
 };
 
 }  // namespace cosim::coupler
