@@ -21,10 +21,10 @@ const std::map<std::string, Role>& participant_roles() {
   return roles;
 }
 
-int Scene::total_windows() const {
+int64_t Scene::total_windows() const {
   // A window shorter than the configured one would change the physics of the last step, so
   // the run covers at least `duration`.
-  return static_cast<int>(std::ceil(duration / coupling.window - 1e-9));
+  return static_cast<int64_t>(std::ceil(duration / coupling.window - 1e-9));
 }
 
 const ParticipantEntry* Scene::flow() const {
@@ -114,6 +114,13 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
   scene.coupling = parse_coupling(root.child("coupling"));
   scene.world = parse_world(root.optional_child("world"));
   scene.output_interval = root.number("output_interval", scene.duration / 100.0, Range::positive());
+  if (const double windows = std::ceil(scene.duration / scene.coupling.window - 1e-9);
+      !(windows <= kMaxWindows)) {
+    root.fail("duration", fmt::format("{:.6g} s in windows of {:.6g} s is {:.3g} windows, more "
+                                      "than the {:.0e} a run may have (check duration and "
+                                      "coupling.window)",
+                                      scene.duration, scene.coupling.window, windows, kMaxWindows));
+  }
 
   Section participants = root.child("participants");
   for (const std::string& name : participants.keys()) {

@@ -137,5 +137,18 @@ TEST(Scene, WorldGravityIsDeclaredOnceForTheScene) {
       << error_of(both);
 }
 
+// A count beyond int used to wrap round to -2147483648 windows, and the run did nothing.
+TEST(Scene, AnAbsurdNumberOfWindowsIsRefusedNamingDuration) {
+  std::string long_run = kScene;
+  long_run.replace(long_run.find("duration: 1.0"), 13, "duration: 1.0e9");
+  const std::string problem = error_of(long_run);
+  EXPECT_NE(problem.find("key 'duration'"), std::string::npos) << problem;
+  EXPECT_NE(problem.find("1e+10 windows"), std::string::npos) << problem;
+  std::string tiny = kScene;
+  tiny.replace(tiny.find("window: 0.1"), 11, "window: 1.0e-300");
+  EXPECT_NE(error_of(tiny).find("key 'duration'"), std::string::npos) << error_of(tiny);
+  EXPECT_EQ(load_scene(write("windows-ok", kScene), parsers()).total_windows(), 10);
+}
+
 }  // namespace
 }  // namespace cosim::scenario

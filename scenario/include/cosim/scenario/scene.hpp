@@ -45,6 +45,10 @@ struct ParticipantEntry {
   Role role = Role::solid;
 };
 
+// The most windows a scene may ask for: 1e9 windows is weeks of coupling at the fastest rates
+// measured; more is a typo in duration or window (a bigger count used to wrap round).
+inline constexpr double kMaxWindows = 1.0e9;
+
 struct Scene {
   std::filesystem::path file;  // scenario.yaml
   std::string name;
@@ -56,7 +60,8 @@ struct Scene {
   std::vector<ParticipantEntry> participants;  // flow provider first, then solids
   YAML::Node resolved;                         // every value used, defaults included
 
-  int total_windows() const;
+  // Windows of the nominal length that cover `duration` (parse checks it is 1 to kMaxWindows).
+  int64_t total_windows() const;
   const ParticipantEntry* flow() const;
   std::vector<const ParticipantEntry*> solids() const;
   const ParticipantEntry& participant(const std::string& acts_as) const;
