@@ -109,6 +109,17 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
   scene.resolved = YAML::Node(YAML::NodeType::Map);
   Section root = Section::root(document, file, scene.resolved);
   scene.name = root.text("name");
+  // The name becomes the run folder's: letters, digits, '_', '-', '.', not starting with '.', so
+  // a run never writes outside --runs-dir.
+  const bool safe = !scene.name.empty() && scene.name.size() <= 100 && scene.name.front() != '.' &&
+                    scene.name.find_first_not_of(
+                        "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                        "0123456789_-.") == std::string::npos;
+  if (!safe) {
+    root.fail("name", "'" + scene.name +
+                          "' cannot name a run folder: use 1-100 letters, digits, '_', '-' or "
+                          "'.', not starting with '.'");
+  }
   scene.description = root.text("description", "");
   scene.duration = root.number("duration", Range::positive());
   scene.coupling = parse_coupling(root.child("coupling"));

@@ -150,5 +150,15 @@ TEST(Scene, AnAbsurdNumberOfWindowsIsRefusedNamingDuration) {
   EXPECT_EQ(load_scene(write("windows-ok", kScene), parsers()).total_windows(), 10);
 }
 
+// The name becomes the run folder: it may not lead outside --runs-dir or be empty.
+TEST(Scene, ANameThatCannotBeAFolderIsRefused) {
+  for (const char* name : {"../../escaped", "/tmp/abs", "\"\"", ".hidden", "a b"}) {
+    std::string yaml = kScene;
+    yaml.replace(yaml.find("name: test"), 10, std::string("name: ") + name);
+    const std::string problem = error_of(yaml);
+    EXPECT_NE(problem.find("key 'name'"), std::string::npos) << name << ": " << problem;
+  }
+}
+
 }  // namespace
 }  // namespace cosim::scenario
