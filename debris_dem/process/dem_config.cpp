@@ -1,6 +1,9 @@
 #include "dem_config.hpp"
 
 #include <algorithm>
+#include <string>
+#include <tuple>
+#include <utility>
 
 namespace cosim::dem {
 
@@ -115,6 +118,18 @@ void parse_flume(scenario::Section& section, DebrisConfig& config) {
 }
 
 // The random packing of seed 004 section 4.1(2), and the gate that holds it while it settles.
+// An axis-aligned box given by two corners; the second must exceed the first on every axis.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_corners(scenario::Section& section,
+                                                          const std::string& min_key,
+                                                          const std::string& max_key) {
+  const Eigen::Vector3d low = section.vector3(min_key);
+  const Eigen::Vector3d high = section.vector3(max_key);
+  if ((high - low).minCoeff() <= 0) {
+    section.fail(max_key, "must exceed " + min_key + " in x, y and z");
+  }
+  return {low, high};
+}
+
 void parse_packing(scenario::Section& section, DebrisConfig& config) {
   if (!section.has("packing")) {
     forbid(section, "gate", "a packing");
@@ -122,11 +137,7 @@ void parse_packing(scenario::Section& section, DebrisConfig& config) {
   }
   auto packing = section.child("packing");
   PackingSpec spec;
-  spec.box_min = packing.vector3("box_min");
-  spec.box_max = packing.vector3("box_max");
-  if ((spec.box_max - spec.box_min).minCoeff() <= 0) {
-    packing.fail("box_max", "must exceed box_min in x, y and z");
-  }
+  std::tie(spec.box_min, spec.box_max) = parse_corners(packing, "box_min", "box_max");
   for (auto& entry : packing.list("spheres")) {
     SphereClass sphere_class{entry.number("diameter", Range::positive()),
                              entry.integer("count", Range::between(0, 1e7))};
@@ -160,11 +171,7 @@ void parse_box(scenario::Section& section, DebrisConfig& config) {
   if (!section.has("box")) return;
   auto box = section.child("box");
   BoxSettings settings;
-  settings.min = box.vector3("min");
-  settings.max = box.vector3("max");
-  if ((settings.max - settings.min).minCoeff() <= 0) {
-    box.fail("max", "must exceed min in x, y and z");
-  }
+  std::tie(settings.min, settings.max) = parse_corners(box, "min", "max");
   config.box = settings;
 }
 

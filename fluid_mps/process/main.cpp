@@ -236,7 +236,6 @@ class FluidProcess final : public coupler::Solver {
       pcg_iterations_ += step.pcg_iterations;
       most_pcg_iterations_ = std::max(most_pcg_iterations_, step.pcg_iterations);
     }
-    system_->set_point_forces({}, config_.sample_radius);
     steps_ += pieces;
     return pieces;
   }

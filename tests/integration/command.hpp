@@ -36,4 +36,18 @@ inline Eigen::Vector3d vector_of(const nlohmann::json& values) {
   return {values[0].get<double>(), values[1].get<double>(), values[2].get<double>()};
 }
 
+// The world impulses [N s] a flow reports for the solids' reaction (its summary info).
+struct FlowImpulses {
+  Eigen::Vector3d booked;        // handed over by the link, in the flow's plane
+  Eigen::Vector3d received;      // taken by fluid particles
+  Eigen::Vector3d undelivered;   // no fluid near the solid point
+  Eigen::Vector3d out_of_plane;  // no place in a 2D flow
+};
+inline FlowImpulses flow_impulses(const nlohmann::json& info) {
+  return {vector_of(info["booked_solid_reaction_impulse"]),
+          vector_of(info["solid_reaction_impulse"]),
+          vector_of(info["undelivered_solid_force_impulse"]),
+          vector_of(info["out_of_plane_solid_force_impulse"])};
+}
+
 }  // namespace cosim::testing

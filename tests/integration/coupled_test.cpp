@@ -26,10 +26,7 @@ void expect_momentum_balance(const std::string& extra_options, const std::string
   const auto& plants = summary["participants"][1]["report"]["info"];
   const Eigen::Vector3d drag = vector_of(plants["drag_impulse"]);
   const Eigen::Vector3d last = vector_of(plants["last_window_drag_impulse"]);
-  const Eigen::Vector3d booked = vector_of(fluid["booked_solid_reaction_impulse"]);
-  const Eigen::Vector3d received = vector_of(fluid["solid_reaction_impulse"]);
-  const Eigen::Vector3d undelivered = vector_of(fluid["undelivered_solid_force_impulse"]);
-  const Eigen::Vector3d out_of_plane = vector_of(fluid["out_of_plane_solid_force_impulse"]);
+  const auto [booked, received, undelivered, out_of_plane] = flow_impulses(fluid);
   ASSERT_GT(drag.norm(), 1e-6) << "the surge must load the plants";
   // World frame, forces in newtons: the span scaling is undone before the report.
   const Eigen::Vector3d expected = -(drag - last);

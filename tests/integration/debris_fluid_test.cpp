@@ -26,6 +26,17 @@ nlohmann::json run_scene(const std::string& scene, const std::string& label,
   return read_summary(run_folder_of(result));
 }
 
+// Writes `yaml` as a scenario of its own and runs it; null when the run failed.
+nlohmann::json run_yaml(const std::string& label, const std::string& yaml, int limit) {
+  const auto folder = fresh_folder("debris-fluid-" + label);
+  std::ofstream(folder / "scenario.yaml") << yaml;
+  const auto result = run_cosim(
+      fmt::format("run {} --runs-dir {} --quiet", folder.string(), folder.string()), limit);
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  if (result.exit_code != 0) return {};
+  return read_summary(run_folder_of(result));
+}
+
 const nlohmann::json& participant(const nlohmann::json& summary, const std::string& name) {
   for (const auto& entry : summary["participants"]) {
     if (entry["name"] == name) return entry;
@@ -40,10 +51,7 @@ TEST(FluidAndDebris, ADamBreakCarriesTheDebrisAndMomentumBalances) {
   const auto& debris = participant(summary, "debris_dem")["report"]["info"];
   const Eigen::Vector3d took = vector_of(debris["interaction_impulse"]);
   const Eigen::Vector3d last = vector_of(debris["last_window_interaction_impulse"]);
-  const Eigen::Vector3d booked = vector_of(fluid["booked_solid_reaction_impulse"]);
-  const Eigen::Vector3d received = vector_of(fluid["solid_reaction_impulse"]);
-  const Eigen::Vector3d undelivered = vector_of(fluid["undelivered_solid_force_impulse"]);
-  const Eigen::Vector3d out_of_plane = vector_of(fluid["out_of_plane_solid_force_impulse"]);
+  const auto [booked, received, undelivered, out_of_plane] = flow_impulses(fluid);
   ASSERT_GT(took.norm(), 1e-5) << "the surge must drag the debris";
   // Everything the debris took from the fluid (drag, added mass) the fluid was handed back, one
   // window later, in the world frame: in its x-z plane, or booked as out of it (the debris'
@@ -91,12 +99,8 @@ TEST(FluidAndDebris, ASuspensionSettlesHinderedAsRichardsonAndZaki) {
   yaml.replace(yaml.find("voidage_correction: true"), 24, "voidage_correction: false");
   const auto radius = yaml.find("    voidage_radius:");
   yaml.erase(radius, yaml.find('\n', radius) + 1 - radius);
-  const auto folder = fresh_folder("debris-fluid-unhindered");
-  std::ofstream(folder / "scenario.yaml") << yaml;
-  const auto result =
-      run_cosim(fmt::format("run {} --runs-dir {} --quiet", folder.string(), folder.string()), 300);
-  ASSERT_EQ(result.exit_code, 0) << result.output;
-  const auto without = read_summary(run_folder_of(result));
+  const auto without = run_yaml("unhindered", yaml, 300);
+  ASSERT_FALSE(without.is_null());
   const auto& ratio =
       participant(without, "debris_dem")["report"]["metrics"]["settling_over_terminal_velocity"];
   EXPECT_GT(ratio["value"].get<double>(), 0.9) << ratio.dump();
@@ -138,9 +142,7 @@ TEST(FluidAndDebrisExtremes, AVeryLightLogShootsOutOfTheWaterAndIsReported) {
 TEST(FluidAndDebrisExtremes, ManyElementsInOneFluidCellStayStable) {
   // 40 spheres of 3 mm packed within 2 x 2 x 2 cm, in one fluid particle's neighbourhood of a
   // 1 cm fluid: their reactions pile onto the same few fluid particles.
-  const auto folder = fresh_folder("debris-fluid-crowd");
-  const auto scene = folder / "scenario.yaml";
-  std::ofstream(scene) << R"(name: crowd
+  const auto summary = run_yaml("crowd", R"(name: crowd
 duration: 0.3
 coupling: {window: 2.0e-3}
 participants:
@@ -160,11 +162,9 @@ participants:
       box_max: [0.06, 0.06, 0.10]
       spheres: [{diameter: 0.003, count: 40}]
       seed: 5
-)";
-  const auto result =
-      run_cosim(fmt::format("run {} --runs-dir {} --quiet", scene.string(), folder.string()), 300);
-  ASSERT_EQ(result.exit_code, 0) << result.output;
-  const auto summary = read_summary(run_folder_of(result));
+)",
+                                300);
+  ASSERT_FALSE(summary.is_null());
   const auto& fluid = participant(summary, "fluid_mps")["report"]["info"];
   const auto& debris = participant(summary, "debris_dem")["report"]["info"];
   EXPECT_LT(fluid["momentum_budget_residual"].get<double>(), 1e-12);
