@@ -106,6 +106,20 @@ TEST(FluidAndDebris, ASuspensionSettlesHinderedAsRichardsonAndZaki) {
   EXPECT_GT(ratio["value"].get<double>(), 0.9) << ratio.dump();
 }
 
+// A metric the run could not measure (no sample inside the averaging window) is stored as null
+// and printed as nan; it used to stop cosim with a JSON type error after the run.
+TEST(FluidAndDebris, AMetricWithNoSamplesPrintsAsNan) {
+  const auto runs = fresh_folder("debris-fluid-unmeasured");
+  const auto result =
+      run_cosim(fmt::format("run {}/hindered_settling --runs-dir {} --quiet --set duration=0.02 "
+                            "--set participants.debris_dem.reference.average_from=1.0",
+                            COSIM_SCENARIOS, runs.string()),
+                120);
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("hindered_settling_velocity"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("nan"), std::string::npos) << result.output;
+}
+
 // Stiff and extreme cases of the coupling: each runs stably (or would stop naming its limit).
 
 TEST(FluidAndDebrisExtremes, AVeryHeavyBoulderFallsThroughAndLandsStably) {
