@@ -34,6 +34,17 @@ MpsParameters parse_parameters(scenario::Section& section) {
   p.pcg_tolerance = section.number("pcg_tolerance", p.pcg_tolerance, Range{0.0, 1e-2, true});
   p.pcg_max_iterations =
       section.integer("pcg_max_iterations", p.pcg_max_iterations, Range::between(1, 1e7));
+  using Preconditioner = MpsParameters::PressurePreconditioner;
+  const std::string preconditioner =
+      section.text("pressure_preconditioner", "automatic",
+                   {"automatic", "amg", "jacobi", "incomplete_cholesky"});
+  p.pressure_preconditioner = preconditioner == "jacobi" ? Preconditioner::jacobi
+                              : preconditioner == "incomplete_cholesky"
+                                  ? Preconditioner::incomplete_cholesky
+                              : preconditioner == "amg" ? Preconditioner::amg
+                                                        : Preconditioner::automatic;
+  p.multigrid_radius_over_l0 = section.number("multigrid_radius_over_l0",
+                                              p.multigrid_radius_over_l0, Range{1.0, 10.0, true});
   p.compressibility = section.number("compressibility", p.compressibility, Range::non_negative());
   const std::string default_source =
       p.source_term == MpsParameters::SourceTerm::mixed ? "mixed" : "density";

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace cosim::mps {
@@ -23,11 +24,13 @@ bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
   return side_a * side_b <= 0.0;
 }
 
-void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
-                                const std::vector<PartitionSegment>& partitions,
-                                const PeriodicBoundary& periodic,
-                                const std::vector<ParticleKind>* kinds) {
-  if (partitions.empty()) return;
+namespace {
+
+// keep[k] = 0 for the pairs k of `list` that cross a partition at `positions`.
+void partition_crossings(const NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
+                         const std::vector<PartitionSegment>& partitions,
+                         const PeriodicBoundary& periodic, const std::vector<ParticleKind>* kinds,
+                         std::vector<char>& keep) {
   const int n = static_cast<int>(list.offset.size()) - 1;
   // Segments near each particle: boxes of the segments grown by the list radius.
   std::vector<Eigen::AlignedBox2d> boxes;
@@ -38,7 +41,7 @@ void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Ve
     box.max().array() += list.radius;
     boxes.push_back(box);
   }
-  std::vector<char> keep(list.index.size(), 1);
+  keep.assign(list.index.size(), 1);
 #pragma omp parallel for schedule(dynamic, 256) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d xi = positions[i].head<2>();
@@ -56,6 +59,30 @@ void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Ve
       }
     }
   }
+}
+
+}  // namespace
+
+void mask_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
+                              const std::vector<PartitionSegment>& partitions,
+                              const PeriodicBoundary& periodic,
+                              const std::vector<ParticleKind>* kinds) {
+  if (partitions.empty()) return;
+  std::vector<char> keep;
+  partition_crossings(list, positions, partitions, periodic, kinds, keep);
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    if (!keep[k]) list.distance[k] = std::numeric_limits<double>::infinity();
+  }
+}
+
+void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
+                                const std::vector<PartitionSegment>& partitions,
+                                const PeriodicBoundary& periodic,
+                                const std::vector<ParticleKind>* kinds) {
+  if (partitions.empty()) return;
+  const int n = static_cast<int>(list.offset.size()) - 1;
+  std::vector<char> keep;
+  partition_crossings(list, positions, partitions, periodic, kinds, keep);
   // Compaction in order (serial): deterministic.
   std::int64_t write = 0;
   std::int64_t begin = 0;

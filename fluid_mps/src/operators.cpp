@@ -1,8 +1,9 @@
 #include "cosim/fluid_mps/operators.hpp"
 
-#include "cosim/fluid_mps/kernels.hpp"
-
 namespace cosim::mps {
+
+// Pairs at or beyond the radius are skipped, as in the fluid step, whose list is longer than
+// each operator's radius.
 
 std::vector<double> number_density(const std::vector<Eigen::Vector3d>& positions,
                                    const NeighbourList& neighbours, double radius) {
@@ -12,7 +13,7 @@ std::vector<double> number_density(const std::vector<Eigen::Vector3d>& positions
   for (int i = 0; i < n; ++i) {
     double sum = 0.0;
     for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {
-      sum += weight(neighbours.distance[k], radius);
+      if (neighbours.distance[k] < radius) sum += weight(neighbours.distance[k], radius);
     }
     result[i] = sum;
   }
@@ -30,9 +31,30 @@ std::vector<Eigen::Vector3d> gradient(int dimension, const std::vector<Eigen::Ve
     for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {
       const int j = neighbours.index[k];
       const double r = neighbours.distance[k];
-      sum += (field[j] - field[i]) / (r * r) * weight(r, radius) * (positions[j] - positions[i]);
+      if (r >= radius) continue;
+      sum += gradient_pair_term(field[j] - field[i], r, radius, positions[j] - positions[i]);
     }
-    result[i] = dimension / n0 * sum;
+    result[i] = gradient_factor(dimension, n0) * sum;
+  }
+  return result;
+}
+
+std::vector<double> divergence(int dimension, const std::vector<Eigen::Vector3d>& positions,
+                               const std::vector<Eigen::Vector3d>& velocities,
+                               const NeighbourList& neighbours, double radius, double n0) {
+  const int n = static_cast<int>(positions.size());
+  std::vector<double> result(n, 0.0);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    double sum = 0.0;
+    for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {
+      const int j = neighbours.index[k];
+      const double r = neighbours.distance[k];
+      if (r >= radius) continue;
+      sum += divergence_pair_term(velocities[j] - velocities[i], positions[j] - positions[i], r,
+                                  radius);
+    }
+    result[i] = gradient_factor(dimension, n0) * sum;
   }
   return result;
 }
@@ -46,9 +68,10 @@ std::vector<double> laplacian(int dimension, const std::vector<double>& field,
   for (int i = 0; i < n; ++i) {
     double sum = 0.0;
     for (int k = neighbours.begin(i); k < neighbours.end(i); ++k) {
+      if (neighbours.distance[k] >= radius) continue;
       sum += (field[neighbours.index[k]] - field[i]) * weight(neighbours.distance[k], radius);
     }
-    result[i] = 2.0 * dimension / (lambda * n0) * sum;
+    result[i] = laplacian_factor(dimension, n0, lambda) * sum;
   }
   return result;
 }

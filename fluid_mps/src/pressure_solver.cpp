@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "amg_preconditioner.hpp"
+
 namespace cosim::mps {
 namespace {
 
@@ -67,43 +69,30 @@ PcgResult solve_incomplete_cholesky(const SparseRows& matrix, const std::vector<
   return result;
 }
 
-}  // namespace
-
-PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
-                    std::vector<double>& x, double tolerance, int max_iterations,
-                    Preconditioner preconditioner) {
+// Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r.
+template <class Precondition>
+PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double>& rhs,
+                              std::vector<double>& x, double tolerance, int max_iterations,
+                              std::vector<double>& r, std::vector<double>& z,
+                              std::vector<double>& p, std::vector<double>& q,
+                              Precondition&& precondition) {
   const int n = matrix.rows();
-  x.resize(n, 0.0);
-  if (preconditioner == Preconditioner::incomplete_cholesky && n > 0) {
-    return solve_incomplete_cholesky(matrix, rhs, x, tolerance, max_iterations);
-  }
   PcgResult result;
-  if (n == 0) {
-    result.converged = true;
-    return result;
-  }
-  std::vector<double> inverse_diagonal(n, 1.0);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
-      if (matrix.column[k] == i && matrix.value[k] > 0.0)
-        inverse_diagonal[i] = 1.0 / matrix.value[k];
-    }
-  }
   const double rhs_norm = std::sqrt(dot(rhs, rhs));
   if (rhs_norm == 0.0) {
     std::fill(x.begin(), x.end(), 0.0);
     result.converged = true;
     return result;
   }
-  std::vector<double> r(n), z(n), p(n), q(n);
+  r.resize(n);
+  p.resize(n);
+  q.resize(n);
   multiply(matrix, x, q);
 #pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    r[i] = rhs[i] - q[i];
-    z[i] = inverse_diagonal[i] * r[i];
-    p[i] = z[i];
-  }
+  for (int i = 0; i < n; ++i) r[i] = rhs[i] - q[i];
+  precondition(r, z);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) p[i] = z[i];
   double rz = dot(r, z);
   double residual = std::sqrt(dot(r, r)) / rhs_norm;
   int iteration = 0;
@@ -116,8 +105,8 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
     for (int i = 0; i < n; ++i) {
       x[i] += alpha * p[i];
       r[i] -= alpha * q[i];
-      z[i] = inverse_diagonal[i] * r[i];
     }
+    precondition(r, z);
     const double rz_next = dot(r, z);
     const double beta = rz_next / rz;
     rz = rz_next;
@@ -130,6 +119,62 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
   result.relative_residual = residual;
   result.converged = residual <= tolerance;
   return result;
+}
+
+}  // namespace
+
+struct PressureSolver::Amg {
+  AmgPreconditioner cycle;
+};
+
+PressureSolver::PressureSolver(Preconditioner preconditioner) : preconditioner_(preconditioner) {}
+PressureSolver::~PressureSolver() = default;
+PressureSolver::PressureSolver(PressureSolver&&) noexcept = default;
+PressureSolver& PressureSolver::operator=(PressureSolver&&) noexcept = default;
+
+PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<double>& rhs,
+                                std::vector<double>& x, double tolerance, int max_iterations,
+                                const SparseRows* hierarchy_matrix) {
+  const int n = matrix.rows();
+  x.resize(n, 0.0);
+  if (n == 0) {
+    PcgResult empty;
+    empty.converged = true;
+    return empty;
+  }
+  if (preconditioner_ == Preconditioner::incomplete_cholesky) {
+    return solve_incomplete_cholesky(matrix, rhs, x, tolerance, max_iterations);
+  }
+  if (uses_amg(n)) {
+    if (!amg_) amg_ = std::make_unique<Amg>();
+    amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
+    return conjugate_gradients(
+        matrix, rhs, x, tolerance, max_iterations, r_, z_, p_, q_,
+        [&](const std::vector<double>& r, std::vector<double>& z) { amg_->cycle.apply(r, z); });
+  }
+  inverse_diagonal_.assign(n, 1.0);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
+      if (matrix.column[k] == i && matrix.value[k] > 0.0)
+        inverse_diagonal_[i] = 1.0 / matrix.value[k];
+    }
+  }
+  const std::vector<double>& inverse_diagonal = inverse_diagonal_;
+  return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, r_, z_, p_, q_,
+                             [&](const std::vector<double>& r, std::vector<double>& z) {
+                               const int size = static_cast<int>(r.size());
+                               z.resize(size);
+#pragma omp parallel for schedule(static) if (size >= 4096)
+                               for (int i = 0; i < size; ++i) z[i] = inverse_diagonal[i] * r[i];
+                             });
+}
+
+PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
+                    std::vector<double>& x, double tolerance, int max_iterations,
+                    Preconditioner preconditioner) {
+  PressureSolver solver(preconditioner);
+  return solver.solve(matrix, rhs, x, tolerance, max_iterations);
 }
 
 }  // namespace cosim::mps

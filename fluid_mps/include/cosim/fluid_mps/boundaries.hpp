@@ -23,6 +23,12 @@ void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Ve
                                 const PeriodicBoundary& periodic = PeriodicBoundary{},
                                 const std::vector<ParticleKind>* kinds = nullptr);
 
+// The same test without removal: crossing pairs get an infinite distance, so every operator skips
+// them while the list keeps its layout (the fluid step's list is kept over several steps).
+void mask_partition_crossings(NeighbourList& list, const std::vector<Eigen::Vector3d>& positions,
+                              const std::vector<PartitionSegment>& partitions,
+                              const PeriodicBoundary& periodic = PeriodicBoundary{},
+                              const std::vector<ParticleKind>* kinds = nullptr);
 // True if the segment p-q crosses the partition segment (2D, x-y plane).
 bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                        const PartitionSegment& segment);

@@ -6,7 +6,9 @@
 #include <vector>
 
 #include "cosim/fluid_mps/kernels.hpp"
+#include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
+#include "cosim/fluid_mps/pressure_solver.hpp"
 
 namespace cosim::mps {
 
@@ -19,6 +21,9 @@ struct StepReport {
   int surface_particles = 0;  // fluid and wall particles with the Dirichlet p = 0 condition
   int collisions = 0;         // fluid-particle contacts corrected (a fluid-fluid pair counts twice)
   int pressure_unknowns = 0;
+  // Neighbour searches in this step: the pair list (with a skin of kSkinOverL0 l0) is kept while
+  // no particle has moved half the skin since it was built, so 0 or 1, rarely 2.
+  int neighbour_searches = 0;
   // Viscous force of the wall and dummy particles on the fluid (Laplacian model, explicit part at
   // r^n) [N in 3D, N/m in 2D]: the bed shear of a channel.
   Eigen::Vector3d wall_viscous_force = Eigen::Vector3d::Zero();
@@ -57,6 +62,9 @@ struct MpsState {
 
 class FluidSystem {
  public:
+  // Skin of the pair list [l0]: pairs are searched within the largest radius + skin.
+  static constexpr double kSkinOverL0 = 0.5;
+
   FluidSystem(MpsParameters parameters, ParticleSet particles);
   // Restart: the state of save_state(); continuing gives the same bits as a straight run.
   FluidSystem(MpsParameters parameters, const MpsState& state);
@@ -127,8 +135,24 @@ class FluidSystem {
   void set_velocity(int i, const Eigen::Vector3d& velocity);
 
  private:
+  struct StepConstants;  // radii, lattice constants and factors of one step (fluid_step.cpp)
+
   void initialise();
   void check_stability(long step) const;
+  // Stages of step(), in order (fluid_step.cpp).
+  void predict(const StepConstants& c, StepReport& report);
+  void collide(const StepConstants& c, StepReport& report);
+  void measure_density(const StepConstants& c, StepReport& report);
+  void assemble_pressure_equation(const StepConstants& c);
+  void assemble_laplacian_rows(double radius, double diagonal_shift, SparseRows& matrix);
+  void solve_pressure(StepReport& report);
+  // Radius of the Laplacian the multigrid hierarchy is built from [m].
+  double hierarchy_radius() const;
+  void correct_with_pressure_gradient(const StepConstants& c, StepReport& report);
+  void finish_step(const StepConstants& c, StepReport& report);
+  // Makes the pair list valid at `x` (rebuilt if a particle moved half the skin since the last
+  // search, or the particle kinds changed) and sets its distances to those at `x`.
+  void update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report);
 
   MpsParameters parameters_;
   std::vector<Eigen::Vector3d> positions_;
@@ -142,6 +166,24 @@ class FluidSystem {
   double particle_mass_ = 0.0;
   LatticeSums density_sums_, gradient_sums_, laplacian_sums_;
   Eigen::AlignedBox3d domain_box_;  // escape box: domain, z extent of 2D runs made non-empty
+
+  // Pair list of every operator: all pairs within the largest radius plus the skin at the
+  // positions of the last search, each particle's partners in ascending index order. Operators
+  // skip pairs beyond their own radius, so the sums do not depend on when the list was built
+  // (a restarted run gives the same bits).
+  NeighbourList neighbours_;
+  std::vector<Eigen::Vector3d> search_positions_;
+  std::vector<char> include_;
+  bool neighbours_valid_ = false;
+  PressureSolver pressure_solver_;
+  // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
+  std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,
+      wall_correction_, pressure_change_, wall_pressure_change_;
+  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_;
+  std::vector<int> collided_, unknown_, unknown_particle_;
+  std::vector<std::int64_t> row_length_;
+  SparseRows matrix_, hierarchy_matrix_;
+  LatticeSums hierarchy_sums_;
 };
 
 }  // namespace cosim::mps

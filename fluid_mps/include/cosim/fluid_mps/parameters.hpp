@@ -94,7 +94,17 @@ struct MpsParameters {
   double max_dt = 1e-3;           // user upper bound [s]
   double pcg_tolerance = 1e-8;    // relative residual |b - A p| / |b|
   int pcg_max_iterations = 2000;
-  bool pcg_incomplete_cholesky = false;  // false: Jacobi (parallel); true: IC(0) (serial)
+  // Preconditioner of the pressure conjugate gradients (pressure_solver.hpp): amg keeps the
+  // iterations about constant as the resolution grows (12-13 per step from a/l0 = 10 to 80 on
+  // the dam break, against 30-200 with jacobi) but costs a hierarchy set-up every step, which
+  // only pays from about 5000 unknowns on; automatic takes jacobi below that and amg above.
+  enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic };
+  PressurePreconditioner pressure_preconditioner = PressurePreconditioner::automatic;
+  // amg: radius [l0] of the Laplacian model the multigrid hierarchy is built from (capped at the
+  // Laplacian radius). Shorter than radius_laplacian_over_l0 makes the set-up and the cycles
+  // cheaper for a few more iterations; 2.5 was the fastest of 2.1 / 2.5 / 3.0 / 4.0 measured at
+  // a/l0 = 80 (13 iterations per step against 15, 11 and 6; docs/performance.md).
+  double multigrid_radius_over_l0 = 2.5;
   // Ikeda-type artificial compressibility [1/Pa]: keeps the Poisson matrix strictly positive
   // definite when a cluster of particles has no free-surface neighbour.
   double compressibility = 0.45e-9;
