@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdlib>
 
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
@@ -39,6 +40,41 @@ BENCHMARK(BM_DamBreakStep)
     ->ArgsProduct({{10, 20, 40, 80}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(200)
+    ->UseRealTime();
+
+// 3D column collapse (a x 2a column over a tank 4a x a x 2a, radii 2.1 / 2.1 / 3.1 l0) at
+// a/l0 = range(0): particle-steps per second, PPE iterations and bytes per particle.
+void BM_Column3dStep(benchmark::State& state) {
+  using namespace cosim::mps;
+  const double a = 0.05715;
+  MpsParameters p;
+  p.dimension = 3;
+  p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
+  p.radius_laplacian_over_l0 = 3.1;
+  p.particle_spacing = a / static_cast<double>(state.range(0));
+  p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
+  p.pressure_preconditioner = static_cast<MpsParameters::PressurePreconditioner>(state.range(1));
+  if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
+    p.multigrid_radius_over_l0 = std::atof(radius);  // for sweeps of the hierarchy radius
+  }
+  FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
+  while (system.time() < 0.03) system.step(system.stable_dt());
+  long pcg_iterations = 0, steps = 0;
+  for (auto _ : state) {
+    pcg_iterations += system.step(system.stable_dt()).pcg_iterations;
+    ++steps;
+  }
+  state.counters["particles"] = system.particle_count();
+  state.counters["particle_steps_per_s"] = benchmark::Counter(
+      static_cast<double>(system.particle_count()) * steps, benchmark::Counter::kIsRate);
+  state.counters["mean_pcg_iterations"] = static_cast<double>(pcg_iterations) / steps;
+}
+
+// Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi).
+BENCHMARK(BM_Column3dStep)
+    ->ArgsProduct({{8, 12, 16}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(40)
     ->UseRealTime();
 
 }  // namespace

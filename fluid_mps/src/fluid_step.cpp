@@ -77,7 +77,8 @@ StepReport FluidSystem::step(double dt) {
   return report;
 }
 
-void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report) {
+void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report,
+                                    const std::vector<int>* moved) {
   const MpsParameters& p = parameters_;
   const int n = particle_count();
   const double l0 = p.particle_spacing;
@@ -126,10 +127,17 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
     ++report.neighbour_searches;
   }
   // Distances at x; pairs cut by a thin partition (seed 001 section 2.2(1)) at x get infinity.
+  const bool partial = valid && moved;
+  if (partial && std::none_of(moved->begin(), moved->end(), [](int m) { return m != 0; })) {
+    return;
+  }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
+    const bool i_moved = partial && (*moved)[i] != 0;
     for (int k = neighbours_.begin(i); k < neighbours_.end(i); ++k) {
-      neighbours_.distance[k] = p.periodic.wrap(x[neighbours_.index[k]] - x[i]).norm();
+      const int j = neighbours_.index[k];
+      if (partial && !i_moved && (*moved)[j] == 0) continue;
+      neighbours_.distance[k] = p.periodic.wrap(x[j] - x[i]).norm();
     }
   }
   mask_partition_crossings(neighbours_, x, p.partitions, p.periodic, &kinds_);
@@ -218,6 +226,7 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
       ++collided_[i];
     }
   }
+  collisions_refreshed_ = true;
   for (int i = 0; i < n; ++i) {
     if (collided_[i] == 0) continue;
     velocity_star_[i] += correction_[i];
@@ -234,7 +243,9 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
 void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   const MpsParameters& p = parameters_;
   const int n = c.n;
-  update_neighbours(position_star_, report);
+  // After the collision stage only the particles it moved need new distances.
+  update_neighbours(position_star_, report, collisions_refreshed_ ? &collided_ : nullptr);
+  collisions_refreshed_ = false;
   const NeighbourList& list = neighbours_;
   fill(number_densities_, n, 0.0);
   fill(divergence_, n, 0.0);

@@ -1,5 +1,6 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 
+#include <omp.h>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -144,46 +145,49 @@ NeighbourList NeighbourGrid::neighbours(const std::vector<Eigen::Vector3d>& posi
   auto distance2 = [&](int i, int j) {
     return periodic_.wrap(positions[j] - positions[i]).squaredNorm();
   };
-  // Pass 1 counts, pass 2 fills: both per particle, hence thread-count independent.
-#pragma omp parallel if (n >= 4096)
+  // One pass: each thread collects the pairs of a contiguous block of particles in its own
+  // buffer, then the blocks are copied in particle order. Each particle's partners come out in
+  // the same order whatever the thread count.
+  const int max_threads = n >= 4096 ? omp_get_max_threads() : 1;
+  std::vector<std::vector<int>> block_index(max_threads);
+  std::vector<std::vector<double>> block_distance(max_threads);
+  std::vector<int> block_begin(max_threads + 1, n);
+#pragma omp parallel num_threads(max_threads) if (n >= 4096)
   {
+    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
+    const int begin = static_cast<int>(static_cast<std::int64_t>(n) * thread / threads);
+    const int end = static_cast<int>(static_cast<std::int64_t>(n) * (thread + 1) / threads);
+    block_begin[thread] = begin;
+    std::vector<int>& index = block_index[thread];
+    std::vector<double>& distance = block_distance[thread];
     std::vector<int> xs;
     xs.reserve(8);
-#pragma omp for schedule(dynamic, 256)
-    for (int i = 0; i < n; ++i) {
+    for (int i = begin; i < end; ++i) {
       if (skipped(i)) continue;
       Eigen::Array3i low, high;
       range(i, xs, low, high);
-      std::int64_t count = 0;
+      const std::size_t first = index.size();
       visit_cells(xs, low, high, [&](int j) {
-        if (j != i && distance2(i, j) < radius2) ++count;
+        if (j == i) return;
+        const double d2 = distance2(i, j);
+        if (d2 < radius2) {
+          index.push_back(j);
+          distance.push_back(std::sqrt(d2));
+        }
       });
-      list.offset[i + 1] = count;
+      list.offset[i + 1] = static_cast<std::int64_t>(index.size() - first);
     }
   }
   for (int i = 0; i < n; ++i) list.offset[i + 1] += list.offset[i];
   list.index.resize(list.offset[n]);
   list.distance.resize(list.offset[n]);
-#pragma omp parallel if (n >= 4096)
-  {
-    std::vector<int> xs;
-    xs.reserve(8);
-#pragma omp for schedule(dynamic, 256)
-    for (int i = 0; i < n; ++i) {
-      if (skipped(i)) continue;
-      Eigen::Array3i low, high;
-      range(i, xs, low, high);
-      std::int64_t k = list.offset[i];
-      visit_cells(xs, low, high, [&](int j) {
-        if (j == i) return;
-        const double d2 = distance2(i, j);
-        if (d2 < radius2) {
-          list.index[k] = j;
-          list.distance[k] = std::sqrt(d2);
-          ++k;
-        }
-      });
-    }
+#pragma omp parallel for schedule(static, 1) num_threads(max_threads) if (n >= 4096)
+  for (int block = 0; block < max_threads; ++block) {
+    if (block_index[block].empty()) continue;
+    const std::int64_t at = list.offset[block_begin[block]];
+    std::copy(block_index[block].begin(), block_index[block].end(), list.index.begin() + at);
+    std::copy(block_distance[block].begin(), block_distance[block].end(),
+              list.distance.begin() + at);
   }
   return list;
 }

@@ -56,6 +56,38 @@ ParticleSet dam_break(MpsParameters& parameters, double column_width, double col
   return set;
 }
 
+ParticleSet dam_break_3d(MpsParameters& parameters, double column_length, double column_height,
+                         double tank_length, double tank_width, double tank_height, int wall_layers,
+                         int dummy_layers) {
+  if (parameters.dimension != 3) {
+    throw std::invalid_argument("dam_break_3d needs dimension = 3");
+  }
+  const double l0 = parameters.particle_spacing;
+  const int layers = wall_layers + dummy_layers;
+  const int nx = cells(tank_length, l0), ny = cells(tank_width, l0), nz = cells(tank_height, l0);
+  const int fx = cells(column_length, l0), fz = cells(column_height, l0);
+  ParticleSet set;
+  for (int iz = -layers; iz < nz; ++iz)
+    for (int iy = -layers; iy < ny + layers; ++iy)
+      for (int ix = -layers; ix < nx + layers; ++ix) {
+        // Depth into the floor or the nearest of the four side walls; 0 inside the tank.
+        const int depth = std::max({-iz, -ix, ix - nx + 1, -iy, iy - ny + 1, 0});
+        const Eigen::Vector3d x((ix + 0.5) * l0, (iy + 0.5) * l0, (iz + 0.5) * l0);
+        if (depth == 0) {
+          if (ix < fx && iz < fz) set.add(x, ParticleKind::fluid);
+          continue;
+        }
+        set.add(x, depth <= wall_layers ? ParticleKind::wall : ParticleKind::dummy);
+      }
+  if (parameters.domain.isEmpty()) {
+    const double margin = (layers + 2) * l0;
+    parameters.domain = Eigen::AlignedBox3d(
+        Eigen::Vector3d(-margin, -margin, -margin),
+        Eigen::Vector3d(tank_length + margin, tank_width + margin, 2.0 * tank_height));
+  }
+  return set;
+}
+
 ParticleSet still_water_tank(MpsParameters& parameters, double width, double depth,
                              double tank_height, int wall_layers, int dummy_layers) {
   return dam_break(parameters, width, depth, width, tank_height, wall_layers, dummy_layers);

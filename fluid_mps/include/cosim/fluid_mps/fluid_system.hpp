@@ -152,7 +152,10 @@ class FluidSystem {
   void finish_step(const StepConstants& c, StepReport& report);
   // Makes the pair list valid at `x` (rebuilt if a particle moved half the skin since the last
   // search, or the particle kinds changed) and sets its distances to those at `x`.
-  void update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report);
+  // With `moved`, the distances are already those at x except for pairs with a particle
+  // i where moved[i] != 0 (the collision stage moves few particles): only those are refreshed.
+  void update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report,
+                         const std::vector<int>* moved = nullptr);
 
   MpsParameters parameters_;
   std::vector<Eigen::Vector3d> positions_;
@@ -175,6 +178,7 @@ class FluidSystem {
   std::vector<Eigen::Vector3d> search_positions_;
   std::vector<char> include_;
   bool neighbours_valid_ = false;
+  bool collisions_refreshed_ = false;  // distances are at r* before the collision corrections
   PressureSolver pressure_solver_;
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
   std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,

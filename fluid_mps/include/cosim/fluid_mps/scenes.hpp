@@ -1,4 +1,5 @@
-// Scene builders (2D) and observers of FluidSystem used by validation tests and benchmarks.
+// Scene builders (2D unless named _3d) and observers of FluidSystem used by validation tests and
+// benchmarks.
 #pragma once
 
 #include <Eigen/Core>
@@ -16,6 +17,13 @@ namespace cosim::mps {
 ParticleSet dam_break(MpsParameters& parameters, double column_width, double column_height,
                       double tank_length, double tank_height, int wall_layers = 2,
                       int dummy_layers = 2);
+
+// 3D column collapse in the world frame (x along the tank, y across, z up; set gravity along
+// -z): a closed-sided tank [0, tank_length] x [0, tank_width] x [0, tank_height] with a floor and
+// four side walls, water in x < column_length, z < column_height over the whole width.
+ParticleSet dam_break_3d(MpsParameters& parameters, double column_length, double column_height,
+                         double tank_length, double tank_width, double tank_height,
+                         int wall_layers = 2, int dummy_layers = 2);
 
 ParticleSet still_water_tank(MpsParameters& parameters, double width, double depth,
                              double tank_height, int wall_layers = 2, int dummy_layers = 2);
