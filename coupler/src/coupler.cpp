@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <thread>
-
 
 namespace cosim::coupler {
 
@@ -33,6 +33,10 @@ Coupler::Coupler(const scenario::Scene& scene, CouplerOptions options)
   bus_options.loss_probability = options_.loss_probability;
   bus_options.loss_seed = static_cast<uint64_t>(options_.run_id) + 17;
   bus_options.chunk_values = scene_.coupling.chunk_values;
+  bus_options.record_mode = options_.record_mode;
+  bus_options.resend_interval = scene_.coupling.resend_interval;
+  // The coupler records fields but never uses them.
+  bus_options.keep_fields = false;
   bus_ = std::make_unique<Bus>(bus_options);
   for (const auto& entry : scene_.participants) {
     names_.push_back(entry.acts_as);
@@ -140,29 +144,170 @@ void Coupler::handshake(ProcessGroup& processes) {
   }
 }
 
-void Coupler::run_window(ProcessGroup& processes, int64_t index, double time, double dt) {
-  next_stable_dt_ = 0.0;
-  Collection collection;
-  collection.stamp = Stamp{index, time, dt};
-  collection.command = window_t::COMMAND_ADVANCE;
-  collection.answer = status_t::STATE_DONE;
-  collection.during = fmt::format("window {} (t = {:.6g} s)", index, time);
-  collection.failed_during = "in " + collection.during;
-  collection.accept = [this](const status_t& status) {
+std::string Coupler::window_text(int64_t index) const {
+  const double time =
+      index >= 0 && index < static_cast<int64_t>(plan_.size()) ? plan_[index].first : 0.0;
+  return fmt::format("window {} (t = {:.6g} s)", index, time);
+}
+
+double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
+  // With fixed windows every window's start and length are known, so the coupler grants a few
+  // windows ahead and the participants go on as soon as their partners' data is there: the
+  // coupler's own round trip leaves the critical path. Adaptive windows need every stable dt of
+  // window k before window k + 1 can be sized, so they are granted one by one.
+  const bool adaptive = scene_.coupling.adaptive_window;
+  const int64_t lookahead = adaptive ? 0 : 2;
+  const double resend = scene_.coupling.resend_interval;
+  plan_.assign(1, {0.0, 0.0});  // window 0 exchanges initial states
+  double next_time = 0.0;
+  bool plan_complete = false;
+  std::map<int64_t, double> stable_dt;  // smallest stable dt reported per window
+  auto plan_next = [&] {
+    const auto index = static_cast<int64_t>(plan_.size());
+    double dt = scene_.coupling.window;
+    if (adaptive) {
+      if (const auto found = stable_dt.find(index - 1); found != stable_dt.end()) {
+        dt = std::min(dt, found->second);
+      }
+    }
+    // Land on the scene's duration; a remainder within round-off of the window is the window
+    // (the window length, not a value 1e-19 shorter, is what the solvers were given before).
+    const double remaining = scene_.duration - next_time;
+    if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
+    if (dt <= scene_.duration * 1e-12) {
+      plan_complete = true;
+      return;
+    }
+    plan_.emplace_back(next_time, dt);
+    // Fixed windows: no round-off drift over long runs.
+    next_time =
+        adaptive ? next_time + dt
+                 : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
+    // Adaptive windows may need more than the nominal count.
+    result.total_windows = std::max(result.total_windows, index);
+  };
+
+  std::map<std::string, int64_t> done;  // highest window each participant finished, in order
+  std::map<std::string, std::map<int64_t, status_t>> early;  // DONEs heard out of order
+  for (const auto& name : names_) done[name] = -1;
+  int64_t completed = -1;
+  int64_t granted = -1;
+  auto last_broadcast = Clock::now();
+  auto last_check = Clock::now();
+  Clock::time_point window_one_started{};
+  auto broadcast = [&] {
+    std::vector<std::pair<double, double>> windows(plan_.begin() + (completed + 1),
+                                                   plan_.begin() + (granted + 1));
+    bus_->publish_window(Stamp{completed + 1, windows.front().first, windows.front().second},
+                         window_t::COMMAND_ADVANCE, result.total_windows, "", windows);
+    last_broadcast = Clock::now();
+  };
+  auto accept = [&](const status_t& status) {
     auto& report = reports_[status.header.sender];
     report.windows += 1;
     report.steps += status.steps;
     report.compute_seconds = status.compute_seconds;
     report.cpu_seconds = status.cpu_seconds;
     report.wait_seconds = status.wait_seconds;
+    if (status.header.window == 0) {
+      report.physics_at_window_zero = status.physics_seconds;
+    } else if (report.physics_at_window_zero >= 0.0) {
+      report.physics_seconds = status.physics_seconds - report.physics_at_window_zero;
+    }
     if (status.stable_dt > 0.0) {
-      next_stable_dt_ =
-          next_stable_dt_ > 0.0 ? std::min(next_stable_dt_, status.stable_dt) : status.stable_dt;
+      auto [it, inserted] = stable_dt.try_emplace(status.header.window, status.stable_dt);
+      if (!inserted) it->second = std::min(it->second, status.stable_dt);
     }
   };
-  collect(processes, collection);
-  // The coupler records fields but never uses them: keep its memory flat over long runs.
-  bus_->forget_fields_before(index);
+
+  while (true) {
+    if (!plan_complete) {
+      if (adaptive) {
+        if (static_cast<int64_t>(plan_.size()) == completed + 1) plan_next();
+      } else {
+        while (!plan_complete && static_cast<int64_t>(plan_.size()) <= completed + 2 + lookahead)
+          plan_next();
+      }
+    }
+    const int64_t last_planned = static_cast<int64_t>(plan_.size()) - 1;
+    if (plan_complete && completed == last_planned) break;
+    const int64_t target = std::min(completed + 1 + lookahead, last_planned);
+    if (target > granted) {
+      granted = target;
+      broadcast();
+    } else if (seconds_since(last_broadcast) >= resend) {
+      broadcast();  // retransmission of the grant, and the coupler's heartbeat
+    }
+    bus_->poll(std::max(0.0, resend - seconds_since(last_broadcast)));
+    bool progressed = false;
+    auto take_statuses = [&] {
+      auto& statuses = bus_->statuses();
+      while (!statuses.empty()) {
+        status_t status = std::move(statuses.front());
+        statuses.pop_front();
+        const std::string sender = status.header.sender;
+        if (status.state == status_t::STATE_FAILED) {
+          throw Failure(fmt::format("'{}' failed in {}: {}", sender,
+                                    window_text(status.header.window), status.message));
+        }
+        if (status.state != status_t::STATE_DONE || !done.contains(sender)) continue;
+        if (status.header.window <= done[sender]) continue;
+        early[sender].emplace(status.header.window, std::move(status));
+        auto& queue = early[sender];
+        while (!queue.empty() && queue.begin()->first == done[sender] + 1) {
+          accept(queue.begin()->second);
+          done[sender] = queue.begin()->first;
+          queue.erase(queue.begin());
+          progressed = true;
+        }
+      }
+    };
+    take_statuses();
+    if (progressed) {
+      int64_t lowest = std::numeric_limits<int64_t>::max();
+      for (const auto& [name, window] : done) lowest = std::min(lowest, window);
+      if (lowest > completed) {
+        if (completed < 0 && lowest >= 0) window_one_started = Clock::now();
+        completed = lowest;
+        if (completed >= 1) result.windows_completed = completed;
+      }
+    }
+    // Exits and silence are checked every few milliseconds, not after every message.
+    if (seconds_since(last_check) >= 0.01 || !progressed) {
+      last_check = Clock::now();
+      for (const auto& exit : processes.poll_exits()) {
+        // Its last reports may still be on their way: take them before naming its window.
+        bus_->poll(0.02);
+        take_statuses();
+        std::string acts_as = exit.name;
+        for (const auto& entry : scene_.participants) {
+          if (entry.name == exit.name) acts_as = entry.acts_as;
+        }
+        const int64_t window = done.contains(acts_as) ? done[acts_as] + 1 : completed + 1;
+        throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(),
+                                  window_text(window), exit.name));
+      }
+      for (const auto& name : names_) {
+        if (done[name] < granted) check_silence({name}, window_text(done[name] + 1));
+      }
+    }
+  }
+  const double windows_wall =
+      window_one_started == Clock::time_point{} ? 0.0 : seconds_since(window_one_started);
+  double physics_sum = 0.0;
+  double physics_max = 0.0;
+  for (const auto& name : names_) {
+    physics_sum += reports_[name].physics_seconds;
+    physics_max = std::max(physics_max, reports_[name].physics_seconds);
+  }
+  const bool serial = scene_.coupling.scheme == "serial-explicit";
+  result.windows_wall_seconds = windows_wall;
+  result.critical_physics_seconds = serial ? physics_sum : physics_max;
+  result.overhead_seconds = std::max(0.0, windows_wall - result.critical_physics_seconds);
+  result.overhead_fraction = windows_wall > 0.0 ? result.overhead_seconds / windows_wall : 0.0;
+  result.overhead_ms_per_window =
+      completed >= 1 ? 1e3 * result.overhead_seconds / static_cast<double>(completed) : 0.0;
+  return next_time;
 }
 
 void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
@@ -180,10 +325,16 @@ void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
     report.wait_seconds = status.wait_seconds;
   };
   collect(processes, collection);
-  for (int repeat = 0; repeat < 3; ++repeat) {
-    bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_RELEASE,
-                         scene_.total_windows());
-    bus_->poll(scene_.coupling.resend_interval);
+  // One RELEASE, then stay a little to answer requests of anyone who lost it (the beacons show
+  // it to them); leave as soon as every process has gone.
+  bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_RELEASE, scene_.total_windows());
+  const auto released = Clock::now();
+  const double linger = 3.0 * scene_.coupling.resend_interval;
+  while (seconds_since(released) < linger) {
+    bus_->poll(0.002);
+    bool any_running = false;
+    for (const auto& entry : scene_.participants) any_running |= processes.running(entry.name);
+    if (!any_running) break;
   }
 }
 
@@ -195,33 +346,17 @@ RunResult Coupler::run(ProcessGroup& processes) {
   int64_t index = 0;
   try {
     handshake(processes);
-    // Window 0 exchanges initial states (dt = 0), then windows 1..N advance time.
-    run_window(processes, 0, 0.0, 0.0);
-    for (index = 1; index <= result.total_windows; ++index) {
-      double dt = scene_.coupling.window;
-      if (scene_.coupling.adaptive_window && next_stable_dt_ > 0.0) {
-        dt = std::min(dt, next_stable_dt_);
-      }
-      // Land on the scene's duration; a remainder within round-off of the window is the window
-      // (the window length, not a value 1e-19 shorter, is what the solvers were given before).
-      const double remaining = scene_.duration - time;
-      if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
-      if (dt <= scene_.duration * 1e-12) break;
-      run_window(processes, index, time, dt);
-      // Fixed windows: no round-off drift over long runs.
-      time = scene_.coupling.adaptive_window
-                 ? time + dt
-                 : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
-      result.windows_completed = index;
-      if (scene_.coupling.adaptive_window && index == result.total_windows &&
-          time < scene_.duration * (1 - 1e-12)) {
-        ++result.total_windows;  // adaptive windows may need more than the nominal count
-      }
-    }
+    time = run_windows(processes, result);
+    index = result.windows_completed + 1;
     finish(processes, result.windows_completed + 1, time);
     result.ok = true;
   } catch (const Failure& failure) {
     result.failure = failure.what();
+    const auto reached = static_cast<std::size_t>(result.windows_completed);
+    if (reached >= 1 && reached < plan_.size()) {
+      time = plan_[reached].first + plan_[reached].second;
+      index = result.windows_completed + 1;
+    }
     for (int repeat = 0; repeat < 3; ++repeat) {
       bus_->publish_window(Stamp{index, time, 0.0}, window_t::COMMAND_ABORT, scene_.total_windows(),
                            result.failure);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <ctime>
 
 namespace cosim::coupler {
@@ -24,6 +25,7 @@ Participant::Participant(ParticipantOptions options)
   bus_options.chunk_values = options_.chunk_values;
   bus_options.loss_probability = options_.loss_probability;
   bus_options.loss_seed = options_.loss_seed;
+  bus_options.resend_interval = options_.resend_interval;
   bus_ = std::make_unique<Bus>(bus_options);
   current_.index = -1;
   current_done_ = true;
@@ -31,8 +33,25 @@ Participant::Participant(ParticipantOptions options)
 }
 
 Participant::~Participant() {
+  const auto counters = bus_->counters();
+  spdlog::info(
+      "transport: {} messages accepted, {} lost in injection, {} found missing, {} asked again, "
+      "{} resent for others, retransmission timeout {:.2f} ms",
+      counters.accepted, counters.dropped_injected, counters.gaps_detected,
+      counters.resends_requested, counters.resends_served, 1e3 * bus_->retransmit_timeout());
   stop_heartbeat_ = true;
+  bus_->wake();
   if (heartbeat_.joinable()) heartbeat_.join();
+}
+
+Participant::ApiTimer::ApiTimer(Participant& owner) : owner_(owner), start_(Clock::now()) {}
+
+Participant::ApiTimer::~ApiTimer() {
+  owner_.api_seconds_ += seconds_since(start_);
+}
+
+double Participant::physics_seconds() const {
+  return seconds_since(started_) - api_seconds_;
 }
 
 double Participant::cpu_seconds() const {
@@ -59,6 +78,7 @@ void Participant::publish_state(int8_t state, int steps, double stable_dt,
   status.wait_seconds = wait_seconds_;
   status.stable_dt = stable_dt;
   status.message = message;
+  status.physics_seconds = physics_seconds();
   bus_->publish_status(stamp(), status);
 }
 
@@ -67,7 +87,9 @@ void Participant::heartbeat_loop() {
   // alive, so only a hung or dead process is reported.
   const auto period = std::chrono::duration<double>(std::clamp(options_.timeout / 10.0, 0.05, 0.5));
   while (!stop_heartbeat_) {
-    std::this_thread::sleep_for(period);
+    // Between heartbeats this thread sends the bus's beacons, so a lost last message is found
+    // quickly even while the main thread computes and does not poll.
+    bus_->beacon_until(Clock::now() + std::chrono::duration_cast<Clock::duration>(period));
     if (stop_heartbeat_) break;
     cosim_msgs::status_t status;
     status.state = cosim_msgs::status_t::STATE_BUSY;
@@ -76,6 +98,7 @@ void Participant::heartbeat_loop() {
     status.cpu_seconds = 0.0;
     status.wait_seconds = 0.0;
     status.stable_dt = 0.0;
+    status.physics_seconds = 0.0;
     try {
       bus_->publish_status(Stamp{heartbeat_window_.load(), 0.0, 0.0}, status);
     } catch (const std::exception& error) {
@@ -96,8 +119,15 @@ Window Participant::next_window() {
   if (!current_done_) {
     throw std::logic_error(fmt::format("window {} was not marked done", current_.index));
   }
+  const ApiTimer timer(*this);
   const auto wait_start = Clock::now();
   auto last_coupler_message = wait_start;
+  if (current_.index < 0 && last_ready_ == Clock::time_point{}) {
+    // The coupler is usually up before us: say we are ready at once rather than at its next
+    // handshake broadcast.
+    publish_state(cosim_msgs::status_t::STATE_READY, 0, 0.0, declaration_);
+    last_ready_ = Clock::now();
+  }
   while (true) {
     auto& windows = bus_->windows();
     while (!windows.empty()) {
@@ -117,30 +147,40 @@ Window Participant::next_window() {
           throw CouplingError(fmt::format("the coupler aborted the run: {}", message.reason));
         case cosim_msgs::window_t::COMMAND_RELEASE:
           break;
-        case cosim_msgs::window_t::COMMAND_ADVANCE:
+        case cosim_msgs::window_t::COMMAND_ADVANCE: {
+          // A grant of one or more windows; older grants repeat what newer ones say.
+          const auto granted = static_cast<std::size_t>(std::max(0, message.window_count));
+          auto grant = [&](int64_t window, double time, double dt) {
+            if (window <= current_.index) return;
+            granted_.try_emplace(window, Window{window, time, dt, message.total_windows, false});
+          };
+          if (granted == 0) grant(index, message.header.sim_time, message.header.dt);
+          for (std::size_t i = 0;
+               i < granted && i < message.window_times.size() && i < message.window_dts.size();
+               ++i) {
+            grant(index + static_cast<int64_t>(i), message.window_times[i], message.window_dts[i]);
+          }
+          break;
+        }
         case cosim_msgs::window_t::COMMAND_FINISH:
-          if (index <= current_.index) {
-            // The coupler missed our answer: repeat it.
-            if (index == current_.index) {
-              publish_state(cosim_msgs::status_t::STATE_DONE, last_steps_, last_stable_dt_, "");
-            }
-            break;
-          }
-          if (message.command == cosim_msgs::window_t::COMMAND_ADVANCE &&
-              index != current_.index + 1) {
-            throw CouplingError(fmt::format(
-                "window {} arrived after window {}: a window was skipped", index, current_.index));
-          }
-          current_.index = index;
-          current_.time = message.header.sim_time;
-          current_.dt = message.header.dt;
-          current_.total_windows = message.total_windows;
-          current_.finish = message.command == cosim_msgs::window_t::COMMAND_FINISH;
-          current_done_ = false;
-          heartbeat_window_ = index;
-          wait_seconds_ += seconds_since(wait_start);
-          return current_;
+          finish_ = Window{index, message.header.sim_time, message.header.dt, message.total_windows,
+                           true};
+          break;
       }
+    }
+    std::optional<Window> next;
+    if (const auto found = granted_.find(current_.index + 1); found != granted_.end()) {
+      next = found->second;
+    } else if (finish_ && finish_->index == current_.index + 1) {
+      next = finish_;
+    }
+    if (next) {
+      std::erase_if(granted_, [&](const auto& item) { return item.first <= next->index; });
+      current_ = *next;
+      current_done_ = false;
+      heartbeat_window_ = current_.index;
+      wait_seconds_ += seconds_since(wait_start);
+      return current_;
     }
     if (seconds_since(last_coupler_message) > options_.timeout) {
       throw CouplingError(
@@ -152,14 +192,44 @@ Window Participant::next_window() {
 }
 
 void Participant::publish(const std::string& field, std::span<const double> values) {
-  bus_->publish_field(stamp(), field, values);
+  const ApiTimer timer(*this);
+  cosim_msgs::field_t entry;
+  entry.name = field;
+  entry.total_values = static_cast<int64_t>(values.size());
+  if (pending_inline_values_ + values.size() <= static_cast<std::size_t>(options_.chunk_values)) {
+    entry.chunk_count = 0;
+    entry.value_count = static_cast<int32_t>(values.size());
+    entry.values.assign(values.begin(), values.end());
+    pending_inline_values_ += values.size();
+  } else {
+    entry.chunk_count = bus_->publish_field(stamp(), field, values);
+    entry.value_count = 0;
+  }
+  pending_fields_.push_back(std::move(entry));
+}
+
+void Participant::flush_inline_fields() {
+  // A solver that waits for a partner after publishing may be what the partner waits for:
+  // send what is held for the report now instead.
+  for (auto& entry : pending_fields_) {
+    if (entry.chunk_count != 0) continue;
+    entry.chunk_count = bus_->publish_field(stamp(), entry.name, entry.values);
+    entry.values.clear();
+    entry.value_count = 0;
+  }
+  pending_inline_values_ = 0;
 }
 
 std::vector<double> Participant::receive(const std::string& sender, const std::string& field,
                                          int64_t window) {
+  const ApiTimer timer(*this);
   const FieldKey key{sender, window, field};
+  const bool holding = std::any_of(pending_fields_.begin(), pending_fields_.end(),
+                                   [](const auto& entry) { return entry.chunk_count == 0; });
+  if (holding && !bus_->has_field(key)) flush_inline_fields();
   const auto wait_start = Clock::now();
   auto last_request = wait_start;
+  bool warned = false;
   while (true) {
     if (auto values = bus_->field_values(key)) {
       wait_seconds_ += seconds_since(wait_start);
@@ -173,10 +243,15 @@ std::vector<double> Participant::receive(const std::string& sender, const std::s
           "'{}' has been silent for {:.1f} s while '{}' waited for its field '{}' of window {}",
           sender, options_.timeout, options_.name, field, window));
     }
+    if (!warned && seconds_since(wait_start) > std::max(1.0, options_.timeout / 2)) {
+      spdlog::warn("still waiting for '{}' field '{}' of window {}: {}", sender, field, window,
+                   bus_->describe_peer(sender));
+      warned = true;
+    }
+    // Lost messages are asked for by the bus as soon as a sequence gap or a beacon shows them;
+    // a whole resend interval without the field asks for it by name as well.
     if (seconds_since(last_request) >= options_.resend_interval) {
-      // Either some chunks were lost (ask for those) or none arrived yet (ask for all; a sender
-      // that has not published yet ignores the request).
-      bus_->request_resend(key, bus_->missing_chunks(key));
+      bus_->request_field(key);
       last_request = Clock::now();
     }
     bus_->poll(options_.resend_interval);
@@ -184,11 +259,23 @@ std::vector<double> Participant::receive(const std::string& sender, const std::s
 }
 
 void Participant::done(int steps, double stable_dt) {
+  const ApiTimer timer(*this);
   last_steps_ = steps;
   last_stable_dt_ = stable_dt;
   total_steps_ += steps;
   current_done_ = true;
-  publish_state(cosim_msgs::status_t::STATE_DONE, steps, stable_dt, "");
+  cosim_msgs::status_t status;
+  status.state = cosim_msgs::status_t::STATE_DONE;
+  status.steps = steps;
+  status.compute_seconds = compute_seconds();
+  status.cpu_seconds = cpu_seconds();
+  status.wait_seconds = wait_seconds_;
+  status.stable_dt = stable_dt;
+  status.physics_seconds = physics_seconds();
+  status.fields = std::move(pending_fields_);
+  pending_fields_.clear();
+  pending_inline_values_ = 0;
+  bus_->publish_status(stamp(), std::move(status));
   // Partners never ask for fields more than a couple of windows old.
   bus_->forget_fields_before(current_.index - 3);
 }

@@ -30,19 +30,40 @@ std::vector<double> pattern(int count) {
   return values;
 }
 
-// Receives `key` on `receiver`, asking `sender`'s bus for missing chunks like a participant.
-std::optional<std::vector<double>> receive_with_resends(Bus& receiver, Bus& sender,
-                                                        const FieldKey& key, double seconds) {
+// Polls both buses until `receiver` has `key`: the transport itself finds and asks for what
+// was lost. Returns the field and how long it took.
+std::optional<std::vector<double>> receive(Bus& receiver, Bus& sender, const FieldKey& key,
+                                           double seconds, double* took = nullptr) {
   const auto start = std::chrono::steady_clock::now();
-  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < seconds) {
-    if (auto values = receiver.field_values(key)) return values;
-    receiver.request_resend(key, receiver.missing_chunks(key));
-    for (int i = 0; i < 5; ++i) {
-      sender.poll(0.002);
-      receiver.poll(0.002);
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  while (elapsed() < seconds) {
+    if (auto values = receiver.field_values(key)) {
+      if (took) *took = elapsed();
+      return values;
     }
+    sender.poll(0.0005);
+    receiver.poll(0.0005);
   }
   return std::nullopt;
+}
+
+// A report with small fields inline, as Participant::done sends it.
+cosim_msgs::status_t report_with(
+    const std::vector<std::pair<std::string, std::vector<double>>>& fields) {
+  cosim_msgs::status_t status{};
+  status.state = cosim_msgs::status_t::STATE_DONE;
+  for (const auto& [name, values] : fields) {
+    cosim_msgs::field_t field{};
+    field.name = name;
+    field.total_values = static_cast<int64_t>(values.size());
+    field.chunk_count = 0;
+    field.value_count = static_cast<int32_t>(values.size());
+    field.values = values;
+    status.fields.push_back(field);
+  }
+  return status;
 }
 
 TEST(Bus, ChunkedFieldSurvivesThirtyPercentLossBitExact) {
@@ -50,8 +71,12 @@ TEST(Bus, ChunkedFieldSurvivesThirtyPercentLossBitExact) {
   Bus receiver(options("receiver", 7, 0.3));
   const auto values = pattern(1000);  // 63 chunks of 16
   sender.publish_field(Stamp{3, 0.1, 0.01}, "positions", values);
-  const auto received = receive_with_resends(receiver, sender, {"sender", 3, "positions"}, 10.0);
+  double took = 0.0;
+  const auto received = receive(receiver, sender, {"sender", 3, "positions"}, 10.0, &took);
   ASSERT_TRUE(received.has_value());
+  // Every loss is found from sequence numbers and beacons and asked for at once: well under the
+  // resend interval per lost chunk (about 20 of the 63 are lost).
+  EXPECT_LT(took, 1.0);
   ASSERT_EQ(received->size(), values.size());
   EXPECT_EQ(std::memcmp(received->data(), values.data(), values.size() * sizeof(double)), 0);
   const auto counters = receiver.counters();
@@ -64,9 +89,69 @@ TEST(Bus, EmptyFieldIsDelivered) {
   Bus sender(options("sender", 8));
   Bus receiver(options("receiver", 8));
   sender.publish_field(Stamp{1, 0.0, 0.0}, "drag", std::vector<double>{});
-  const auto received = receive_with_resends(receiver, sender, {"sender", 1, "drag"}, 5.0);
+  const auto received = receive(receiver, sender, {"sender", 1, "drag"}, 5.0);
   ASSERT_TRUE(received.has_value());
   EXPECT_TRUE(received->empty());
+}
+
+// One message per participant and window: small fields travel inside the DONE report.
+TEST(Bus, SmallFieldsTravelInsideTheReport) {
+  Bus sender(options("sender", 9));
+  Bus receiver(options("receiver", 9));
+  const auto positions = pattern(9);
+  const auto drag = pattern(5);
+  sender.publish_status(Stamp{2, 0.0, 0.1},
+                        report_with({{"positions", positions}, {"drag", drag}}));
+  ASSERT_TRUE(receive(receiver, sender, {"sender", 2, "drag"}, 5.0).has_value());
+  EXPECT_EQ(receiver.field_values({"sender", 2, "positions"}), positions);
+  EXPECT_EQ(receiver.field_values({"sender", 2, "drag"}), drag);
+  EXPECT_EQ(receiver.counters().accepted, 1) << "fields and DONE in one message";
+  ASSERT_EQ(receiver.statuses().size(), 1u);
+  EXPECT_EQ(receiver.statuses().front().state, cosim_msgs::status_t::STATE_DONE);
+}
+
+BusOptions slow_fallback(BusOptions bus) {
+  // A resend interval of seconds: only gap detection and beacons can recover within the test.
+  bus.resend_interval = 2.0;
+  return bus;
+}
+
+// The last message of a burst shows no gap: the sender's beacon names it and the receiver asks
+// for it within milliseconds, not after a resend interval.
+TEST(Bus, LostLastReportIsRecoveredWithinMilliseconds) {
+  Bus sender(slow_fallback(options("sender", 10)));
+  Bus receiver(slow_fallback(options("receiver", 10)));
+  sender.publish_status(Stamp{1, 0.0, 0.1}, report_with({{"positions", pattern(3)}}));
+  ASSERT_TRUE(receive(receiver, sender, {"sender", 1, "positions"}, 5.0).has_value());
+  receiver.drop_next(1);
+  sender.publish_status(Stamp{2, 0.1, 0.1}, report_with({{"positions", pattern(4)}}));
+  double took = 0.0;
+  const auto received = receive(receiver, sender, {"sender", 2, "positions"}, 5.0, &took);
+  ASSERT_TRUE(received.has_value());
+  EXPECT_EQ(*received, pattern(4));
+  EXPECT_LT(took, 0.2) << "waited for the resend interval instead of a beacon";
+  EXPECT_EQ(receiver.counters().dropped_injected, 1);
+  EXPECT_EQ(receiver.counters().gaps_detected, 1);
+  EXPECT_GE(sender.counters().resends_served, 1);
+}
+
+// A chunk lost inside a burst is seen missing as soon as the next chunk arrives.
+TEST(Bus, GapInAChunkedFieldIsRequestedAtOnce) {
+  Bus sender(slow_fallback(options("sender", 11)));
+  Bus receiver(slow_fallback(options("receiver", 11)));
+  sender.publish_status(Stamp{0, 0.0, 0.0}, report_with({}));
+  for (int i = 0; i < 20 && receiver.statuses().empty(); ++i) receiver.poll(0.01);
+  ASSERT_EQ(receiver.statuses().size(), 1u);
+  receiver.drop_next(1);  // the first of the field's 4 chunks
+  const auto values = pattern(64);
+  sender.publish_field(Stamp{1, 0.0, 0.1}, "positions", values);
+  double took = 0.0;
+  const auto received = receive(receiver, sender, {"sender", 1, "positions"}, 5.0, &took);
+  ASSERT_TRUE(received.has_value());
+  EXPECT_EQ(*received, values);
+  EXPECT_LT(took, 0.2);
+  EXPECT_EQ(receiver.counters().gaps_detected, 1);
+  EXPECT_EQ(receiver.counters().dropped_duplicate, 0) << "only the lost chunk is sent again";
 }
 
 TEST(Bus, ForeignRunsAreIgnored) {

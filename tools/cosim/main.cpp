@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
                         "participants.fluid_mps.particle_spacing=0.004");
   };
   bool quiet = false;
+  std::string record = "all";
   auto add_run_options = [&](CLI::App* command) {
     command->add_option("--runs-dir", request.runs_dir, "where run folders are made")
         ->default_val("runs");
@@ -69,6 +70,11 @@ int main(int argc, char** argv) {
                      "auto: private network namespace when multicast is unavailable; host; "
                      "private")
         ->check(CLI::IsMember({"auto", "host", "private"}));
+    command
+        ->add_option("--record", record,
+                     "what events.lcmlog keeps: all (replayable), control (windows and reports, "
+                     "no field values), none (no log)")
+        ->check(CLI::IsMember({"all", "control", "none"}));
     command->add_flag("--quiet", quiet, "no progress lines");
     command
         ->add_option("--progress-interval", request.progress_interval,
@@ -120,6 +126,7 @@ int main(int argc, char** argv) {
   try {
     request.faults = parse_faults(faults);
     request.show_progress = !quiet;
+    request.record_mode = coupler::parse_record_mode(record);
     if (validate->parsed()) {
       const auto scene = tool::load_with_overrides(bundle, overrides);
       fmt::print("{}: valid ({} participants, {} windows of {} s)\n", scene.file.string(),

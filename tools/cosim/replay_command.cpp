@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "cosim/output/point_series.hpp"
 #include "cosim/replay/recording.hpp"
@@ -61,6 +62,22 @@ int replay_run(const ReplayRequest& request) {
     throw std::runtime_error(fmt::format("{}: the recorded run has no participant '{}'",
                                          recorded_scenario.string(), request.participant));
   }
+  // A replay plays the partners' recorded fields: say so plainly when the log cannot have them.
+  if (!std::filesystem::exists(recorded_log)) {
+    throw std::runtime_error(fmt::format(
+        "{}: the run has no event log (recorded with --record none?); replay needs a run "
+        "recorded with --record all",
+        request.recorded_run.string()));
+  }
+  if (std::ifstream in(request.recorded_run / "summary.json"); in) {
+    const auto summary = nlohmann::json::parse(in, nullptr, false);
+    if (summary.is_object() && summary.value("record", "all") != "all") {
+      throw std::runtime_error(fmt::format(
+          "{}: the run was recorded with --record {}: its log holds windows and reports but no "
+          "field values, so its participants cannot be replayed; rerun it with --record all",
+          recorded_log.string(), summary.value("record", "")));
+    }
+  }
   if (driven->executable == "replay") {
     throw std::runtime_error(
         fmt::format("'{}' was itself a replay in that run", request.participant));
@@ -91,6 +108,7 @@ int replay_run(const ReplayRequest& request) {
   const scenario::Scene scene = scenario::load_scene(replay_scenario, participant_parsers());
   RunRequest run = request.run;
   run.run_label = "replay-" + driven->acts_as;
+  run.record_mode = coupler::RecordMode::all;  // the comparison reads the new run's fields
   const RunOutcome outcome = run_scene(scene, run);
   std::filesystem::rename(replay_scenario, outcome.run_dir / "replay-input.yaml");
   if (!outcome.result.ok) {

@@ -84,7 +84,10 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   coupler::CouplerOptions options;
   options.url = url;
   options.run_id = run_id;
-  options.event_log = outcome.run_dir / "events.lcmlog";
+  if (request.record_mode != coupler::RecordMode::none) {
+    options.event_log = outcome.run_dir / "events.lcmlog";
+  }
+  options.record_mode = request.record_mode;
   options.loss_probability = request.loss_probability;
   // The progress lines (with an estimate of the time left) come from the monitor below, which
   // listens to the coupler's window broadcasts.
@@ -140,6 +143,8 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   summary["total_windows"] = result.total_windows;
   summary["wall_seconds"] = result.wall_seconds;
   summary["injected_loss"] = request.loss_probability;
+  // `cosim replay` reads this to tell a log without field values from a damaged one.
+  summary["record"] = coupler::record_mode_name(request.record_mode);
   nlohmann::json participants = nlohmann::json::array();
   for (const auto& report : result.participants) {
     const auto& entry = scene.participant(report.name);
@@ -150,6 +155,7 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
                             {"compute_seconds", report.compute_seconds},
                             {"cpu_seconds", report.cpu_seconds},
                             {"coupling_wait_seconds", report.wait_seconds},
+                            {"physics_seconds", report.physics_seconds},
                             {"windows", report.windows},
                             {"steps", report.steps},
                             {"report", parse_metrics(report.metrics_json)}});
@@ -158,7 +164,16 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   summary["traffic"] = {{"accepted", result.traffic.accepted},
                         {"dropped_injected", result.traffic.dropped_injected},
                         {"dropped_duplicate", result.traffic.dropped_duplicate},
-                        {"dropped_foreign", result.traffic.dropped_foreign}};
+                        {"dropped_foreign", result.traffic.dropped_foreign},
+                        {"gaps_detected", result.traffic.gaps_detected},
+                        {"resends_requested", result.traffic.resends_requested}};
+  // Wall time of windows 1..N that no participant's physics explains (coupler.hpp).
+  summary["coupling_overhead"] = {
+      {"windows_wall_seconds", result.windows_wall_seconds},
+      {"critical_physics_seconds", result.critical_physics_seconds},
+      {"overhead_seconds", result.overhead_seconds},
+      {"overhead_fraction", result.overhead_fraction},
+      {"overhead_ms_per_window", result.overhead_ms_per_window}};
   write_text(outcome.run_dir / "summary.json", summary.dump(2) + "\n");
   return outcome;
 }

@@ -17,6 +17,7 @@ struct RunRequest {
   std::filesystem::path runs_dir = "runs";
   std::string run_label;                      // appended to the scene name in the run folder's name
   double loss_probability = 0.0;              // injected loss of received messages, every process
+  coupler::RecordMode record_mode = coupler::RecordMode::all;  // what events.lcmlog keeps
   std::map<std::string, std::string> faults;  // participant -> "exit@W" / "hang@W" / "throw@W"
   bool show_progress = true;
   double progress_interval =

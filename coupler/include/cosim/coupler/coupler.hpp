@@ -19,6 +19,7 @@ struct CouplerOptions {
   std::string url;
   int64_t run_id = 0;
   std::filesystem::path event_log;  // every message heard is recorded here
+  RecordMode record_mode = RecordMode::all;
   double loss_probability = 0.0;
   double startup_timeout = 60.0;  // seconds for every participant to become ready
 };
@@ -28,6 +29,10 @@ struct ParticipantReport {
   double compute_seconds = 0.0;  // wall time outside waiting for partners
   double cpu_seconds = 0.0;      // CPU time of the process, all threads
   double wait_seconds = 0.0;
+  // Wall time the participant spent outside the participant API in windows 1..N: its physics
+  // (and its output), the part of the run that is not coupling.
+  double physics_seconds = 0.0;
+  double physics_at_window_zero = -1.0;
   int64_t windows = 0;
   int64_t steps = 0;         // solver steps (sub-steps for sub-cycling solids), summed over windows
   std::string metrics_json;  // the participant's final report
@@ -41,6 +46,14 @@ struct RunResult {
   double simulated_time = 0.0;
   double wall_seconds = 0.0;
   double coupler_wait_seconds = 0.0;
+  // Wall time of windows 1..N, and the part of it no participant's physics explains: in the
+  // serial scheme the participants' physics add up along the window, in the parallel one the
+  // slowest participant's does. The rest is coupling: messages, waiting, retransmission.
+  double windows_wall_seconds = 0.0;
+  double critical_physics_seconds = 0.0;
+  double overhead_seconds = 0.0;
+  double overhead_fraction = 0.0;
+  double overhead_ms_per_window = 0.0;
   std::vector<ParticipantReport> participants;
   Bus::Counters traffic;
 };
@@ -69,7 +82,10 @@ class Coupler {
   };
   void collect(ProcessGroup& processes, const Collection& collection);
   void handshake(ProcessGroup& processes);
-  void run_window(ProcessGroup& processes, int64_t index, double time, double dt);
+  // Windows 0..N: grants windows ahead (fixed windows) so participants never wait for the
+  // coupler, collects every DONE, and returns the simulated time reached.
+  double run_windows(ProcessGroup& processes, RunResult& result);
+  std::string window_text(int64_t index) const;
   void finish(ProcessGroup& processes, int64_t index, double time);
   void check_processes(ProcessGroup& processes, const std::string& during);
   void check_silence(const std::vector<std::string>& pending, const std::string& during);
@@ -79,7 +95,7 @@ class Coupler {
   std::unique_ptr<Bus> bus_;
   std::vector<std::string> names_;  // acts_as names of the participants
   std::map<std::string, ParticipantReport> reports_;
-  double next_stable_dt_ = 0.0;
+  std::vector<std::pair<double, double>> plan_;  // (start, length) of window i, once known
   std::chrono::steady_clock::time_point started_;
 };
 

@@ -5,7 +5,9 @@
 #pragma once
 
 #include <atomic>
+#include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -58,7 +60,8 @@ class Participant {
 
   // Waits for the next window (answering the handshake and repeated windows on the way).
   Window next_window();
-  // Publishes a field for the current window.
+  // Publishes a field for the current window. Fields that fit into one message together travel
+  // inside the window's DONE report; larger ones go out at once in chunks.
   void publish(const std::string& field, std::span<const double> values);
   // Waits for `sender`'s field of `window`, asking for lost chunks again. Throws CouplingError
   // when the sender stays silent longer than the timeout, or the coupler aborts.
@@ -74,6 +77,8 @@ class Participant {
   // Time accounting: compute time is everything outside waiting for partners.
   double wait_seconds() const { return wait_seconds_; }
   double compute_seconds() const;
+  // Wall time outside every call of this API (what the solver itself spent) [s].
+  double physics_seconds() const;
   // CPU time of this process, every thread (OpenMP workers, heartbeat) included [s].
   double cpu_seconds() const;
   int64_t total_steps() const { return total_steps_; }
@@ -83,7 +88,20 @@ class Participant {
   void publish_state(int8_t state, int steps, double stable_dt, const std::string& message);
   void heartbeat_loop();
   void check_abort();
+  void flush_inline_fields();
   Stamp stamp() const;
+  // Adds the time of one API call to api_seconds_.
+  class ApiTimer {
+   public:
+    explicit ApiTimer(Participant& owner);
+    ~ApiTimer();
+    ApiTimer(const ApiTimer&) = delete;
+    ApiTimer& operator=(const ApiTimer&) = delete;
+
+   private:
+    Participant& owner_;
+    std::chrono::steady_clock::time_point start_;
+  };
 
   ParticipantOptions options_;
   std::string declaration_;
@@ -93,7 +111,14 @@ class Participant {
   int last_steps_ = 0;
   double last_stable_dt_ = 0.0;
   double wait_seconds_ = 0.0;
+  double api_seconds_ = 0.0;
   int64_t total_steps_ = 0;
+  // Windows the coupler has granted and not yet run; the FINISH once it came.
+  std::map<int64_t, Window> granted_;
+  std::optional<Window> finish_;
+  // This window's fields, for its DONE report.
+  std::vector<cosim_msgs::field_t> pending_fields_;
+  std::size_t pending_inline_values_ = 0;
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_ready_{};
   std::atomic<bool> stop_heartbeat_{false};
