@@ -123,7 +123,8 @@ void FluidSystem::initialise() {
       pressure_solver_ = PressureSolver(Preconditioner::amg);
       break;
     case Kind::automatic:
-      pressure_solver_ = PressureSolver(Preconditioner::automatic);
+      pressure_solver_ = PressureSolver(Preconditioner::automatic,
+                                        p.dimension == 3 ? kAmgFromUnknowns3d : kAmgFromUnknowns);
       break;
   }
   StepReport unused;

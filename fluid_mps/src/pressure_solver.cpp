@@ -127,7 +127,8 @@ struct PressureSolver::Amg {
   AmgPreconditioner cycle;
 };
 
-PressureSolver::PressureSolver(Preconditioner preconditioner) : preconditioner_(preconditioner) {}
+PressureSolver::PressureSolver(Preconditioner preconditioner, int amg_from_unknowns)
+    : preconditioner_(preconditioner), amg_from_unknowns_(amg_from_unknowns) {}
 PressureSolver::~PressureSolver() = default;
 PressureSolver::PressureSolver(PressureSolver&&) noexcept = default;
 PressureSolver& PressureSolver::operator=(PressureSolver&&) noexcept = default;

@@ -36,6 +36,11 @@ enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic };
 // 2.5 / 7.3 / 23.9 ms against jacobi 1.7 / 5.3 / 23.3 ms at 0.8 / 2.0 / 5.5 k particles, and
 // 1.6 times faster than jacobi at 17 k.
 constexpr int kAmgFromUnknowns = 5000;
+// 3D (radius 3.1 l0): Jacobi was 1.2 times faster than AMG at every size measured (9.7 k to
+// 37.6 k particles), its iterations growing as N^(1/3) (33 to 58); at that rate they reach
+// about 120 near 300 k unknowns, where the AMG step (9-10 iterations) is expected to win. The
+// switch point is that extrapolation, not a measurement.
+constexpr int kAmgFromUnknowns3d = 200000;
 
 // Solves A x = b from the initial guess in x. Stops when |r| <= tolerance |b|. The Krylov loop is
 // our own, parallel, with dot products summed in fixed blocks, so the result is identical for
@@ -48,7 +53,8 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
 // a time step allocates nothing once the particle count has settled.
 class PressureSolver {
  public:
-  explicit PressureSolver(Preconditioner preconditioner = Preconditioner::amg);
+  explicit PressureSolver(Preconditioner preconditioner = Preconditioner::amg,
+                          int amg_from_unknowns = kAmgFromUnknowns);
   ~PressureSolver();
   PressureSolver(PressureSolver&&) noexcept;
   PressureSolver& operator=(PressureSolver&&) noexcept;
@@ -63,12 +69,13 @@ class PressureSolver {
   // Whether a system of `rows` unknowns is preconditioned by multigrid.
   bool uses_amg(int rows) const {
     return preconditioner_ == Preconditioner::amg ||
-           (preconditioner_ == Preconditioner::automatic && rows >= kAmgFromUnknowns);
+           (preconditioner_ == Preconditioner::automatic && rows >= amg_from_unknowns_);
   }
 
  private:
   struct Amg;  // hypre objects; the header includes no hypre or MPI header
   Preconditioner preconditioner_;
+  int amg_from_unknowns_;
   std::unique_ptr<Amg> amg_;
   std::vector<double> r_, z_, p_, q_, inverse_diagonal_;
 };
