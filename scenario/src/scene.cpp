@@ -90,8 +90,13 @@ CouplingSettings parse_coupling(Section coupling) {
       coupling.text("scheme", settings.scheme, {"serial-explicit", "parallel-explicit"});
   settings.window = coupling.number("window", Range::positive());
   settings.adaptive_window = coupling.flag("adaptive_window", settings.adaptive_window);
-  settings.interpolation =
-      coupling.text("interpolation", settings.interpolation, {"linear", "hold"});
+  // Solids hold the flow's fields over a window (and the flow the solids'); the key used to
+  // promise a linear interpolation that no participant did.
+  if (coupling.has("interpolation")) {
+    coupling.fail("interpolation",
+                  "is not a setting: every participant holds its partners' fields constant over "
+                  "a window (explicit coupling); remove the key");
+  }
   settings.timeout = coupling.number("timeout", settings.timeout, Range::between(0.1, 3600.0));
   settings.resend_interval =
       coupling.number("resend_interval", settings.resend_interval, Range::between(0.001, 10.0));

@@ -160,5 +160,14 @@ TEST(Scene, ANameThatCannotBeAFolderIsRefused) {
   }
 }
 
+// coupling.interpolation was parsed and never used: naming it is an error, not a silent no-op.
+TEST(Scene, InterpolationIsNotASetting) {
+  std::string yaml = kScene;
+  yaml.replace(yaml.find("  window: 0.1"), 13, "  window: 0.1\n  interpolation: linear");
+  const std::string problem = error_of(yaml);
+  EXPECT_NE(problem.find("key 'coupling.interpolation'"), std::string::npos) << problem;
+  EXPECT_NE(problem.find("scenario.yaml:5:"), std::string::npos) << problem;
+}
+
 }  // namespace
 }  // namespace cosim::scenario

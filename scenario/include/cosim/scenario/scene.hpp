@@ -20,7 +20,6 @@ struct CouplingSettings {
   std::string scheme = "serial-explicit";  // or "parallel-explicit"
   double window = 1e-3;                    // fixed window length [s]
   bool adaptive_window = false;            // window = min(window, flow's stable dt)
-  std::string interpolation = "linear";    // solids: "linear" across the window or "hold"
   double timeout = 5.0;                    // seconds of silence before a participant is hung
   double resend_interval = 0.05;           // seconds between retransmissions
   int chunk_values = 4096;                 // float64 values per message chunk
