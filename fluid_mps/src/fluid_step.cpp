@@ -14,14 +14,6 @@
 namespace cosim::mps {
 namespace {
 
-bool is_fluid(ParticleKind kind) {
-  return kind == ParticleKind::fluid;
-}
-
-bool is_inactive(ParticleKind kind) {
-  return kind == ParticleKind::inactive;
-}
-
 const Eigen::Vector3d kZero = Eigen::Vector3d::Zero();
 
 template <class T>

@@ -15,14 +15,6 @@
 namespace cosim::mps {
 namespace {
 
-bool is_fluid(ParticleKind kind) {
-  return kind == ParticleKind::fluid;
-}
-
-bool is_inactive(ParticleKind kind) {
-  return kind == ParticleKind::inactive;
-}
-
 void validate(const MpsParameters& p) {
   auto require = [](bool ok, const char* what) {
     if (!ok) throw std::invalid_argument(std::string("MpsParameters: ") + what);

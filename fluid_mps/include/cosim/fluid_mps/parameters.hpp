@@ -156,6 +156,13 @@ inline MpsParameters seed001_fishway_parameters(double particle_spacing) {
 // stay fixed-size.
 enum class ParticleKind { fluid, wall, dummy, inactive };
 
+inline bool is_fluid(ParticleKind kind) {
+  return kind == ParticleKind::fluid;
+}
+inline bool is_inactive(ParticleKind kind) {
+  return kind == ParticleKind::inactive;
+}
+
 // Initial particles of a scene. Wall and dummy particles move with their (prescribed) velocity.
 struct ParticleSet {
   std::vector<Eigen::Vector3d> positions;
