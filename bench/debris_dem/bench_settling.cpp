@@ -1,44 +1,13 @@
-// 5000 spheres (d = 5-10 mm, seed 004 material) dropped into a closed box and settling, dt = 1e-5
-// s as in seed 004 table 3. Reports sphere-steps per second (items_per_second); second
-// argument: DemParameters::threads.
+// 5000 spheres (d = 5-10 mm, seed 004 material) dropped into a box (settling_scene.hpp) and
+// settling, dt = 1e-5 s as in seed 004 table 3. Reports sphere-steps per second (items_per_second);
+// second argument: DemParameters::threads.
 #include <benchmark/benchmark.h>
 
-#include <memory>
-#include <random>
-
-#include "cosim/debris_dem/dem_world.hpp"
-#include "cosim/debris_dem/scenes.hpp"
+#include "settling_scene.hpp"
 
 namespace {
 
-using cosim::dem::DemParameters;
-using cosim::dem::DemWorld;
-using cosim::dem::Material;
-
-std::unique_ptr<DemWorld> settling_box(int spheres, int threads) {
-  DemParameters p;
-  p.user_dt = 1e-5;
-  p.threads = threads;
-  auto world = std::make_unique<DemWorld>(p);
-  Material m;
-  const double side = 0.2;
-  const double height = 0.3;
-  cosim::dem::FlumeSpec box;
-  box.length = side;
-  box.width = side;
-  box.wall_height = height;
-  cosim::dem::add_flume(*world, box, m);
-  world->add_triangle({side, 0, 0}, {side, side, 0}, {side, side, height}, m);
-  world->add_triangle({side, 0, 0}, {side, side, height}, {side, 0, height}, m);
-  cosim::dem::PackingSpec spec;
-  spec.box_min = {0, 0, 0};
-  spec.box_max = {side, side, 0.13};
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<double> d(0.005, 0.01);
-  for (int i = 0; i < spheres; ++i) spec.sphere_diameters.push_back(d(rng));
-  cosim::dem::random_packing(*world, spec, m, m);
-  return world;
-}
+using cosim::dem::bench::settling_box;
 
 void BM_SettlingSpheres(benchmark::State& state) {
   const int spheres = static_cast<int>(state.range(0));

@@ -231,8 +231,11 @@ DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& sce
   p.user_dt = section.number("substep", 1.0e-5, Range::non_negative());
   p.safety_factor = section.number("safety_factor", p.safety_factor, Range{0.0, 1.0, true});
   p.list_margin = section.number("list_margin", p.list_margin, Range::positive());
-  p.list_reset_interval =
-      section.number("list_reset_interval", p.list_reset_interval, Range::positive());
+  // Absent: the list is rebuilt on displacement only (an infinite interval, which the resolved
+  // scenario could not hold as a finite number).
+  if (section.has("list_reset_interval")) {
+    p.list_reset_interval = section.number("list_reset_interval", Range::positive());
+  }
   p.max_overlap_ratio =
       section.number("max_overlap_ratio", p.max_overlap_ratio, Range{0.0, 1.0, true});
 

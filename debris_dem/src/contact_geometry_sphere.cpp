@@ -17,23 +17,6 @@ Eigen::Vector3d any_unit_normal_to(const Eigen::Vector3d& n) {
 
 }  // namespace
 
-ContactGeometry sphere_sphere(const Eigen::Vector3d& center_a, double radius_a, double radius_b) {
-  ContactGeometry g;
-  // Eq. (13): contact while the center distance is at most the sum of the radii (squared test
-  // first: most candidates are apart).
-  const double reach = radius_a + radius_b;
-  const double distance_squared = center_a.squaredNorm();
-  if (distance_squared > reach * reach) return g;
-  const double distance = std::sqrt(distance_squared);
-  g.touching = true;
-  g.feature = ContactFeature::kSphereSphere;
-  g.overlap = radius_a + radius_b - distance;
-  g.normal = distance > 0.0 ? Eigen::Vector3d(center_a / distance) : Eigen::Vector3d::UnitZ();
-  // Midway through the overlap lens: B's surface point pushed in by half the overlap.
-  g.point = g.normal * (radius_b - 0.5 * g.overlap);
-  return g;
-}
-
 ContactGeometry sphere_cylinder(const Eigen::Vector3d& sphere_center, double sphere_radius,
                                 const Eigen::Vector3d& axis, double cylinder_radius,
                                 double half_length) {

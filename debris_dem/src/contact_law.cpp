@@ -73,44 +73,6 @@ double damping_ratio_for_restitution(double e, bool clipped) {
   return 0.5 * (low + high);
 }
 
-void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
-                       const Eigen::Vector3d& relative_velocity, double dt, bool clip) {
-  const Eigen::Vector3d& n = geometry.normal;
-  pair.touching = true;
-  pair.overlap = geometry.overlap;
-  // Normal: P_n = K_n delta_n plus the dashpot; approach (v.n < 0) compresses.
-  const double normal_velocity = relative_velocity.dot(n);
-  double normal_force =
-      pair.normal_stiffness * geometry.overlap - pair.normal_damping * normal_velocity;
-  if (clip && normal_force < 0.0) normal_force = 0.0;  // fig. 3a: no tension
-
-  // Tangential: rotate the stored shear onto the current tangent plane (the local frame of the
-  // pair spring turns with the contact, eq. 10-12), keep its length, add this step's increment.
-  const Eigen::Vector3d tangential_velocity = relative_velocity - normal_velocity * n;
-  Eigen::Vector3d spring = pair.tangential_spring;
-  const double old_length = spring.norm();
-  spring -= spring.dot(n) * n;
-  const double new_length = spring.norm();
-  if (new_length > 0.0) spring *= old_length / new_length;
-  spring += tangential_velocity * dt;  // eq. (11): S(t) = S(t - dt) + k dq
-  Eigen::Vector3d tangential_force =
-      -pair.tangential_stiffness * spring - pair.tangential_damping * tangential_velocity;
-  // Mohr-Coulomb, cohesion 0 (fig. 3b): |P_s| <= P_n tan(phi), P_n the transmitted normal force
-  // (see the header: clipped total, or the spring part when the dashpot may pull). While sliding
-  // the spring holds exactly the limit force, so sliding stops smoothly when the load drops.
-  const double coulomb_load = clip ? normal_force : pair.normal_stiffness * geometry.overlap;
-  const double limit = pair.friction * std::max(coulomb_load, 0.0);
-  const double magnitude = tangential_force.norm();
-  if (magnitude > limit) {
-    tangential_force *= magnitude > 0.0 ? limit / magnitude : 0.0;
-    spring = pair.tangential_stiffness > 0.0
-                 ? Eigen::Vector3d(-tangential_force / pair.tangential_stiffness)
-                 : Eigen::Vector3d::Zero();
-  }
-  pair.tangential_spring = spring;
-  pair.force_on_a = normal_force * n + tangential_force;
-}
-
 double contact_elastic_energy(const ContactPair& pair) {
   if (!pair.touching) return 0.0;
   return 0.5 * pair.normal_stiffness * pair.overlap * pair.overlap +

@@ -194,10 +194,10 @@ WindowReport DemWorld::advance(double window_dt, const FluidAtElements& fluid) {
     update_list_if_needed(dt);
     compute_forces(dt);
     apply_fluid(fluid);
-    integrate(dt, with_fluid);
+    const bool suspect = integrate(dt, with_fluid);
     time_ += dt;
     ++step_count_;
-    check_stability();
+    if (suspect) check_stability();
   }
   for (auto& f : mean_fluid_force_) f /= substeps;
   for (auto& f : mean_interaction_force_) f /= substeps;

@@ -17,12 +17,13 @@ using Element = DemWorld::Element;
 // machine a barrier can stall for a scheduler slice).
 constexpr int kParallelThreshold = 4096;
 
-ContactGeometry pair_geometry(const DemWorld& world, const ContactPair& p) {
+// d: displacement from B's anchor to A's (DemWorld::displacement(a, b)).
+ContactGeometry pair_geometry(const DemWorld& world, int ia, int ib, PairKind kind,
+                              const Eigen::Vector3d& d) {
   const auto& elements = world.elements();
-  const Element& a = elements[p.a];
-  const Element& b = elements[p.b];
-  const Eigen::Vector3d d = world.displacement(p.a, p.b);
-  switch (p.kind) {
+  const Element& a = elements[ia];
+  const Element& b = elements[ib];
+  switch (kind) {
     case PairKind::kSphereSphere:
       return sphere_sphere(d, a.radius, b.radius);
     case PairKind::kSphereCylinder:
@@ -46,21 +47,14 @@ void release(ContactPair& p) {
   p.overlap_ratio = 0.0;
 }
 
-void evaluate(const DemWorld& world, ContactPair& p, const ContactGeometry& g, double dt,
-              bool clip) {
-  const auto& elements = world.elements();
-  const Element& a = elements[p.a];
-  const Element& b = elements[p.b];
-  // Geometry is in B's anchor frame: A's center sits at the displacement, B's at the origin
-  // (a triangle is fixed, so its lever does not matter).
-  p.lever_a = g.point - world.displacement(p.a, p.b);
-  p.lever_b = g.point;
-  const Eigen::Vector3d velocity_a = a.velocity + a.angular_velocity.cross(p.lever_a);
-  const Eigen::Vector3d velocity_b = b.velocity + b.angular_velocity.cross(p.lever_b);
-  apply_contact_law(p, g, velocity_a - velocity_b, dt, clip);
-  const double smaller_radius =
-      b.kind == ElementKind::kTriangle ? a.radius : std::min(a.radius, b.radius);
-  p.overlap_ratio = g.overlap / smaller_radius;
+void release(DemWorld::PairState& s) {
+  s.tangential_spring.setZero();
+  s.overlap = 0.0;
+  s.overlap_ratio = 0.0;
+}
+
+bool pair_order(const DemWorld::PairSlot& l, const ContactPair& r) {
+  return l.a != r.a ? l.a < r.a : l.b < r.b;
 }
 
 }  // namespace
@@ -72,15 +66,19 @@ void DemWorld::update_list_if_needed(double dt) {
     // Seed 004 rebuilds at a fixed interval t_reset and relies on the margin; the list is also
     // rebuilt as soon as two elements could have closed the margin. Each element's sweep (path
     // of its center plus, for a log, |omega| L / 2 of its ends) is summed in integrate().
-    double largest = 0.0;
-    double second = 0.0;
-    for (const int i : moving_) {
-      const double sweep = elements_[i].sweep;
-      if (sweep > largest) {
-        second = largest;
-        largest = sweep;
-      } else if (sweep > second) {
-        second = sweep;
+    double largest = sweep_largest_;
+    double second = sweep_second_;
+    if (!sweep_top_valid_) {
+      largest = 0.0;
+      second = 0.0;
+      for (const int i : moving_) {
+        const double sweep = elements_[i].sweep;
+        if (sweep > largest) {
+          second = largest;
+          largest = sweep;
+        } else if (sweep > second) {
+          second = sweep;
+        }
       }
     }
     rebuild = largest + second > parameters_.list_margin;
@@ -90,12 +88,39 @@ void DemWorld::update_list_if_needed(double dt) {
   std::vector<ContactPair> triangle_pairs;
   std::vector<int> group_start;
   build_candidate_pairs(*this, parameters_.list_margin, pairs, triangle_pairs, group_start);
-  carry_over_history(pairs_, pairs);
+  // Split the new list into slots and states, carrying the spring history of pairs in both
+  // lists (both sorted by a, b). A touching pair is always in the new list: it lies within the
+  // margin.
+  std::vector<PairSlot> slots(pairs.size());
+  std::vector<PairState> states(pairs.size());
+  std::size_t old = 0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const ContactPair& p = pairs[k];
+    PairSlot& slot = slots[k];
+    PairState& state = states[k];
+    slot.a = p.a;
+    slot.b = p.b;
+    slot.kind = p.kind;
+    slot.reach = elements_[p.a].radius + elements_[p.b].radius;
+    state.constants = {p.normal_stiffness, p.tangential_stiffness, p.normal_damping,
+                       p.tangential_damping, p.friction};
+    while (old < pair_slots_.size() && pair_order(pair_slots_[old], p)) ++old;
+    if (old < pair_slots_.size() && pair_slots_[old].a == p.a && pair_slots_[old].b == p.b) {
+      slot.touching = pair_slots_[old].touching;
+      state.tangential_spring = pair_states_[old].tangential_spring;
+      state.overlap = pair_states_[old].overlap;
+      state.overlap_ratio = pair_states_[old].overlap_ratio;
+    }
+  }
+  pair_slots_.swap(slots);
+  pair_states_.swap(states);
   carry_over_history(triangle_pairs_, triangle_pairs);
-  pairs_.swap(pairs);
   triangle_pairs_.swap(triangle_pairs);
   triangle_group_start_.swap(group_start);
   for (auto& e : elements_) e.sweep = 0.0;
+  sweep_largest_ = 0.0;
+  sweep_second_ = 0.0;
+  sweep_top_valid_ = true;
   time_since_list_ = 0.0;
   list_valid_ = true;
   ++list_rebuilds_;
@@ -105,21 +130,124 @@ void DemWorld::compute_forces(double dt) {
   const bool clip = parameters_.clip_normal_force;
   const int threads = std::max(1, parameters_.threads);
   const int n = element_count();
-  for (int i = 0; i < n; ++i) {
-    force_[i] = elements_[i].fixed ? Eigen::Vector3d::Zero()
-                                   : Eigen::Vector3d(elements_[i].mass * parameters_.gravity);
-    torque_[i].setZero();
+  if (static_cast<int>(gravity_force_.size()) != n || gravity_force_for_ != parameters_.gravity) {
+    gravity_force_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const Element& e = elements_[i];
+      gravity_force_[i] =
+          e.fixed ? Eigen::Vector3d::Zero() : Eigen::Vector3d(e.mass * parameters_.gravity);
+    }
+    gravity_force_for_ = parameters_.gravity;
   }
-  const int pair_count = static_cast<int>(pairs_.size());
+  std::copy(gravity_force_.begin(), gravity_force_.end(), force_.begin());
+  std::fill(torque_.begin(), torque_.end(), Eigen::Vector3d::Zero());
+  if (!hot_valid_ || static_cast<int>(hot_position_.size()) != n) {
+    hot_position_.resize(n);
+    hot_velocity_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const Element& e = elements_[i];
+      hot_position_[i] = {e.local, e.radius, e.cell, 0};
+      hot_velocity_[i] = {e.velocity, e.angular_velocity};
+    }
+    hot_valid_ = true;
+  }
+  // displacement(a, b) on the compact copy (same operations, same result).
+  const double region_size = parameters_.region_size;
+  const auto hot_displacement = [&](int a, int b) -> Eigen::Vector3d {
+    const HotPosition& pa = hot_position_[a];
+    const HotPosition& pb = hot_position_[b];
+    const Eigen::Vector3i dc = pa.cell - pb.cell;
+    if (dc.isZero()) return pa.local - pb.local;
+    return dc.cast<double>() * region_size + (pa.local - pb.local);
+  };
+  // Largest overlap ratio of the step, taken in list order (the first pair wins a tie).
+  double max_ratio = 0.0;
+  int worst_a = -1;
+  int worst_b = -1;
+  const auto gather = [&](int a, int b, const Eigen::Vector3d& force_on_a,
+                          const Eigen::Vector3d& lever_a, const Eigen::Vector3d& lever_b,
+                          double overlap_ratio) {
+    force_[a] += force_on_a;
+    torque_[a] += lever_a.cross(force_on_a);
+    force_[b] -= force_on_a;
+    torque_[b] -= lever_b.cross(force_on_a);
+    if (overlap_ratio > max_ratio) {
+      max_ratio = overlap_ratio;
+      worst_a = a;
+      worst_b = b;
+    }
+  };
+  const int pair_count = static_cast<int>(pair_slots_.size());
   const bool parallel_pairs = threads > 1 && pair_count > kParallelThreshold;
-#pragma omp parallel for schedule(dynamic, 512) if (parallel_pairs) num_threads(threads)
-  for (int k = 0; k < pair_count; ++k) {
-    ContactPair& p = pairs_[k];
-    const ContactGeometry g = pair_geometry(*this, p);
-    if (g.touching) {
-      evaluate(*this, p, g, dt, clip);
+  // Candidate k: a sphere pair farther apart than its radii is rejected with the comparison
+  // sphere_sphere() makes, reading only its slot. A touching pair runs the contact law on a
+  // ContactPair assembled on the stack and keeps its spring in the state. Returns whether it
+  // touches, with the force and levers in p.
+  const auto evaluate_pair = [&](int k, ContactPair& p) {
+    PairSlot& slot = pair_slots_[k];
+    const Eigen::Vector3d d = hot_displacement(slot.a, slot.b);
+    ContactGeometry g;
+    if (slot.kind == PairKind::kSphereSphere) {
+      if (d.squaredNorm() > slot.reach * slot.reach) {
+        if (slot.touching) release(pair_states_[k]);
+        slot.touching = false;
+        return false;
+      }
+      g = sphere_sphere(d, hot_position_[slot.a].radius, hot_position_[slot.b].radius);
     } else {
-      release(p);
+      g = pair_geometry(*this, slot.a, slot.b, slot.kind, d);
+    }
+    PairState& state = pair_states_[k];
+    if (!g.touching) {
+      if (slot.touching) release(state);
+      slot.touching = false;
+      return false;
+    }
+    p = candidate_pair(k);
+    // evaluate() on the compact copies; B is a sphere or cylinder here, never a triangle.
+    const HotVelocity& va = hot_velocity_[slot.a];
+    const HotVelocity& vb = hot_velocity_[slot.b];
+    p.lever_a = g.point - d;
+    p.lever_b = g.point;
+    const Eigen::Vector3d velocity_a = va.velocity + va.angular_velocity.cross(p.lever_a);
+    const Eigen::Vector3d velocity_b = vb.velocity + vb.angular_velocity.cross(p.lever_b);
+    apply_contact_law(p, g, velocity_a - velocity_b, dt, clip);
+    p.overlap_ratio =
+        g.overlap / std::min(hot_position_[slot.a].radius, hot_position_[slot.b].radius);
+    state.tangential_spring = p.tangential_spring;
+    state.overlap = p.overlap;
+    state.overlap_ratio = p.overlap_ratio;
+    slot.touching = true;
+    return true;
+  };
+  if (parallel_pairs) {
+    pair_results_.resize(pair_slots_.size());
+#pragma omp parallel for schedule(dynamic, 512) num_threads(threads)
+    for (int k = 0; k < pair_count; ++k) {
+      ContactPair p;
+      if (evaluate_pair(k, p)) pair_results_[k] = {p.force_on_a, p.lever_a, p.lever_b};
+    }
+    for (int k = 0; k < pair_count; ++k) {
+      if (!pair_slots_[k].touching) continue;
+      const PairResult& r = pair_results_[k];
+      gather(pair_slots_[k].a, pair_slots_[k].b, r.force_on_a, r.lever_a, r.lever_b,
+             pair_states_[k].overlap_ratio);
+    }
+  } else {
+    // One pass: the triangle contacts below read only velocities, never force_, so gathering
+    // here adds to each element in the same order as gathering after them.
+    ContactPair p;
+    for (int k = 0; k < pair_count; ++k) {
+      // Inline rejection of a sphere pair that was apart and still is (three in four candidates
+      // of the settled pile), without the call into evaluate_pair; same test as there.
+      const PairSlot& slot = pair_slots_[k];
+      if (slot.kind == PairKind::kSphereSphere && !slot.touching) {
+        const Eigen::Vector3d d = hot_displacement(slot.a, slot.b);
+        if (d.squaredNorm() > slot.reach * slot.reach) continue;
+      }
+      if (evaluate_pair(k, p)) {
+        gather(p.a, p.b, p.force_on_a, p.lever_a, p.lever_b, p.overlap_ratio);
+      }
     }
   }
   // Triangle contacts of one element are filtered together so that a sphere on a shared edge or
@@ -137,7 +265,17 @@ void DemWorld::compute_forces(double dt) {
     geometry.resize(end - begin);
     order.clear();
     for (int k = begin; k < end; ++k) {
-      geometry[k - begin] = pair_geometry(*this, triangle_pairs_[k]);
+      const ContactPair& p = triangle_pairs_[k];
+      // The moving element through the compact copy (its Element is a cache miss: these are
+      // the elements next to a wall, spread over the array); triangles are few and stay cached.
+      const Eigen::Vector3d d = hot_displacement(p.a, p.b);
+      if (p.kind == PairKind::kSphereTriangle) {
+        const Element& tri = elements_[p.b];
+        geometry[k - begin] =
+            sphere_triangle(d, hot_position_[p.a].radius, tri.edge1, tri.edge2, tri.normal);
+      } else {
+        geometry[k - begin] = pair_geometry(*this, p.a, p.b, p.kind, d);
+      }
       if (geometry[k - begin].touching) order.push_back(k - begin);
     }
     std::sort(order.begin(), order.end(), [&](int l, int r) {
@@ -166,46 +304,58 @@ void DemWorld::compute_forces(double dt) {
     }
     for (int k = begin; k < end; ++k) {
       if (accepted[k - begin]) {
-        evaluate(*this, triangle_pairs_[k], geometry[k - begin], dt, clip);
+        // evaluate() on the compact copies; B is a fixed triangle (its lever does not matter,
+        // its velocities are zero in the copy as in the Element).
+        ContactPair& p = triangle_pairs_[k];
+        const ContactGeometry& g = geometry[k - begin];
+        const Eigen::Vector3d d = hot_displacement(p.a, p.b);
+        const HotVelocity& va = hot_velocity_[p.a];
+        const HotVelocity& vb = hot_velocity_[p.b];
+        p.lever_a = g.point - d;
+        p.lever_b = g.point;
+        const Eigen::Vector3d velocity_a = va.velocity + va.angular_velocity.cross(p.lever_a);
+        const Eigen::Vector3d velocity_b = vb.velocity + vb.angular_velocity.cross(p.lever_b);
+        apply_contact_law(p, g, velocity_a - velocity_b, dt, clip);
+        p.overlap_ratio = g.overlap / hot_position_[p.a].radius;
       } else {
         release(triangle_pairs_[k]);
       }
     }
   }
-  // Gather in list order (deterministic sums regardless of thread count).
-  double max_ratio = 0.0;
-  const ContactPair* worst = nullptr;
-  const auto gather = [&](const ContactPair& p) {
-    if (!p.touching) return;
-    force_[p.a] += p.force_on_a;
-    torque_[p.a] += p.lever_a.cross(p.force_on_a);
-    force_[p.b] -= p.force_on_a;
-    torque_[p.b] -= p.lever_b.cross(p.force_on_a);
-    if (p.overlap_ratio > max_ratio) {
-      max_ratio = p.overlap_ratio;
-      worst = &p;
-    }
-  };
-  for (const auto& p : pairs_) gather(p);
-  for (const auto& p : triangle_pairs_) gather(p);
+  for (const auto& p : triangle_pairs_) {
+    if (p.touching) gather(p.a, p.b, p.force_on_a, p.lever_a, p.lever_b, p.overlap_ratio);
+  }
   window_max_overlap_ = std::max(window_max_overlap_, max_ratio);
-  if (worst != nullptr && max_ratio > parameters_.max_overlap_ratio) {
+  if (worst_a >= 0 && max_ratio > parameters_.max_overlap_ratio) {
     std::ostringstream message;
-    message << "DEM overlap ratio " << max_ratio << " between elements " << worst->a << " and "
-            << worst->b << " exceeds max_overlap_ratio " << parameters_.max_overlap_ratio
+    message << "DEM overlap ratio " << max_ratio << " between elements " << worst_a << " and "
+            << worst_b << " exceeds max_overlap_ratio " << parameters_.max_overlap_ratio
             << " at t = " << time_ << " s (time step too large or stiffness too low)";
     throw StabilityError(message.str());
   }
 }
 
-void DemWorld::integrate(double dt, bool with_fluid) {
+bool DemWorld::integrate(double dt, bool with_fluid) {
   const double size = parameters_.region_size;
   const int threads = std::max(1, parameters_.threads);
   const int count = static_cast<int>(moving_.size());
   const bool parallel_elements = threads > 1 && count > kParallelThreshold;
-#pragma omp parallel for schedule(static) if (parallel_elements) num_threads(threads)
+  // Copies are only kept current once compute_forces() made them so (the next call refreshes
+  // them otherwise).
+  const bool keep_hot = hot_valid_ && hot_position_.size() == elements_.size();
+  const Eigen::Vector3d& domain_min = parameters_.domain_min;
+  const Eigen::Vector3d& domain_max = parameters_.domain_max;
+  turn_angle_.resize(count);
+  bool suspect = false;
+  double largest = 0.0;  // m, largest sweep of a moving element since the last list build
+  double second = 0.0;   // m, second largest
+  // clang-format off
+#pragma omp parallel for schedule(static) if (parallel_elements) num_threads(threads) \
+    reduction(||: suspect)
+  // clang-format on
   for (int k = 0; k < count; ++k) {
-    Element& e = elements_[moving_[k]];
+    const int i = moving_[k];
+    Element& e = elements_[i];
     // Eq. (9) in leapfrog form: v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.
     if (with_fluid && (added_mass_normal_[k] > 0.0 || added_mass_axial_[k] > 0.0)) {
       e.velocity += added_mass_acceleration(k) * dt;
@@ -231,12 +381,45 @@ void DemWorld::integrate(double dt, bool with_fluid) {
     }
     const double angle = e.angular_velocity.norm() * dt;
     e.sweep += e.velocity.norm() * dt + e.half_length * angle;
-    if (angle > 0.0) {
-      const Eigen::Quaterniond turn(Eigen::AngleAxisd(angle, e.angular_velocity.normalized()));
-      e.orientation = (turn * e.orientation).normalized();
-      e.axis = e.orientation * Eigen::Vector3d::UnitZ();
+    turn_angle_[k] = angle;
+    if (!parallel_elements) {
+      // The two largest sweeps for update_list_if_needed(), which then need not walk the
+      // elements again (the same values as its own pass).
+      if (e.sweep > largest) {
+        second = largest;
+        largest = e.sweep;
+      } else if (e.sweep > second) {
+        second = e.sweep;
+      }
+    }
+    if (keep_hot) {
+      hot_position_[i].local = e.local;
+      hot_position_[i].cell = e.cell;
+      hot_velocity_[i] = {e.velocity, e.angular_velocity};
+    }
+    // The conditions of check_stability(), on the same values (position() is this sum).
+    const Eigen::Vector3d p = e.cell.cast<double>() * size + e.local;
+    if (!e.local.allFinite() || !e.velocity.allFinite() || !e.angular_momentum.allFinite() ||
+        (p.array() < domain_min.array()).any() || (p.array() > domain_max.array()).any()) {
+      suspect = true;
     }
   }
+  sweep_largest_ = largest;
+  sweep_second_ = second;
+  sweep_top_valid_ = !parallel_elements;
+  // The attitude in a second pass: its chain (sine and cosine, product, norm, division) is long,
+  // and on its own several elements' chains overlap in the core; the same operations as in one
+  // pass, so the same bits.
+#pragma omp parallel for schedule(static) if (parallel_elements) num_threads(threads)
+  for (int k = 0; k < count; ++k) {
+    const double angle = turn_angle_[k];
+    if (!(angle > 0.0)) continue;
+    Element& e = elements_[moving_[k]];
+    const Eigen::Quaterniond turn(Eigen::AngleAxisd(angle, e.angular_velocity.normalized()));
+    e.orientation = (turn * e.orientation).normalized();
+    e.axis = e.orientation * Eigen::Vector3d::UnitZ();
+  }
+  return suspect;
 }
 
 void DemWorld::check_stability() const {
@@ -270,10 +453,10 @@ void DemWorld::check_stability() const {
 void DemWorld::step(double dt) {
   update_list_if_needed(dt);
   compute_forces(dt);
-  integrate(dt, false);
+  const bool suspect = integrate(dt, false);
   time_ += dt;
   ++step_count_;
-  check_stability();
+  if (suspect) check_stability();
 }
 
 }  // namespace cosim::dem

@@ -63,6 +63,8 @@ int DemWorld::add_element(Element element, const Eigen::Vector3d& anchor,
   force_.emplace_back(Eigen::Vector3d::Zero());
   torque_.emplace_back(Eigen::Vector3d::Zero());
   list_valid_ = false;
+  hot_valid_ = false;
+  gravity_force_.clear();
   return static_cast<int>(elements_.size()) - 1;
 }
 
@@ -184,6 +186,7 @@ std::vector<Eigen::Vector3d> DemWorld::triangle_vertices(int i) const {
 void DemWorld::set_velocity(int i, const Eigen::Vector3d& v) {
   if (elements_.at(i).fixed) throw std::invalid_argument("set_velocity: element is fixed");
   elements_[i].velocity = v;
+  hot_valid_ = false;
 }
 
 void DemWorld::set_angular_velocity(int i, const Eigen::Vector3d& omega) {
@@ -192,16 +195,7 @@ void DemWorld::set_angular_velocity(int i, const Eigen::Vector3d& omega) {
   const Eigen::Matrix3d r = e.orientation.toRotationMatrix();
   e.angular_momentum = r * e.inertia_body.asDiagonal() * r.transpose() * omega;
   e.angular_velocity = omega;
-}
-
-Eigen::Vector3d DemWorld::displacement(int a, int b) const {
-  // Seed 004 eq. (45): the integer region difference is exact, so only the small local
-  // positions are subtracted in floating point.
-  const Element& ea = elements_[a];
-  const Element& eb = elements_[b];
-  const Eigen::Vector3i dc = ea.cell - eb.cell;
-  if (dc.isZero()) return ea.local - eb.local;
-  return dc.cast<double>() * parameters_.region_size + (ea.local - eb.local);
+  hot_valid_ = false;
 }
 
 std::vector<Eigen::Vector3d> DemWorld::element_centers() const {
@@ -235,7 +229,11 @@ double DemWorld::stable_dt() const {
   for (const Material& m : materials_) {
     stiffness = std::max({stiffness, m.normal_stiffness, m.tangential_stiffness});
   }
-  if (!std::isfinite(critical_mass) || stiffness <= 0.0) return parameters_.list_reset_interval;
+  if (!std::isfinite(critical_mass) || stiffness <= 0.0) {
+    // Nothing to resolve: the seed's list interval (1e-3 s) when no finite one is set.
+    const double interval = parameters_.list_reset_interval;
+    return std::isfinite(interval) ? interval : 1.0e-3;
+  }
   return parameters_.safety_factor * std::sqrt(critical_mass / stiffness);
 }
 
@@ -257,14 +255,16 @@ double DemWorld::potential_energy() const {
 
 double DemWorld::elastic_energy() const {
   double energy = 0.0;
-  for (const auto& p : pairs_) energy += contact_elastic_energy(p);
+  for (int k = 0; k < static_cast<int>(pair_slots_.size()); ++k) {
+    if (pair_slots_[k].touching) energy += contact_elastic_energy(candidate_pair(k));
+  }
   for (const auto& p : triangle_pairs_) energy += contact_elastic_energy(p);
   return energy;
 }
 
 int DemWorld::contact_count() const {
   int count = 0;
-  for (const auto& p : pairs_) count += p.touching ? 1 : 0;
+  for (const auto& slot : pair_slots_) count += slot.touching ? 1 : 0;
   for (const auto& p : triangle_pairs_) count += p.touching ? 1 : 0;
   return count;
 }

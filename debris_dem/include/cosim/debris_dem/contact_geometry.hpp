@@ -37,8 +37,25 @@ struct ContactGeometry {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   // contact point, B-anchor frame
 };
 
-// Sphere A (center relative to B's center) on sphere B. Eq. (13).
-ContactGeometry sphere_sphere(const Eigen::Vector3d& center_a, double radius_a, double radius_b);
+// Sphere A (center relative to B's center) on sphere B. Eq. (13). Inline: the DEM's contact
+// loop calls it for every touching sphere pair.
+inline ContactGeometry sphere_sphere(const Eigen::Vector3d& center_a, double radius_a,
+                                     double radius_b) {
+  ContactGeometry g;
+  // Eq. (13): contact while the center distance is at most the sum of the radii (squared test
+  // first: most candidates are apart).
+  const double reach = radius_a + radius_b;
+  const double distance_squared = center_a.squaredNorm();
+  if (distance_squared > reach * reach) return g;
+  const double distance = std::sqrt(distance_squared);
+  g.touching = true;
+  g.feature = ContactFeature::kSphereSphere;
+  g.overlap = radius_a + radius_b - distance;
+  g.normal = distance > 0.0 ? Eigen::Vector3d(center_a / distance) : Eigen::Vector3d::UnitZ();
+  // Midway through the overlap lens: B's surface point pushed in by half the overlap.
+  g.point = g.normal * (radius_b - 0.5 * g.overlap);
+  return g;
+}
 
 // Sphere A on cylinder B centered at the origin: side (eq. 14-16), base face (eq. 17-22) or base
 // rim (eq. 23-24). A sphere center inside the cylinder is pushed out through the nearer surface.
