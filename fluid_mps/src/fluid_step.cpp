@@ -26,7 +26,7 @@ void fill(std::vector<T>& v, std::size_t n, const T& value) {
 struct FluidSystem::StepConstants {
   double dt;
   int n, d;
-  double re_n, re_g, re_l, collision_distance, search_radius;
+  double re_n, re_g, re_l, collision_distance;
   double n0_n, n0_g, n0_l, lambda;
   Eigen::Vector3d driving;  // periodic channel: constant pressure drop as a body force
 };
@@ -45,7 +45,6 @@ StepReport FluidSystem::step(double dt) {
   c.re_g = p.radius_gradient_over_l0 * l0;
   c.re_l = p.radius_laplacian_over_l0 * l0;
   c.collision_distance = p.collision_distance_ratio * l0;
-  c.search_radius = std::max({c.re_n, c.re_g, c.re_l, c.collision_distance});
   c.n0_n = density_sums_.n0;
   c.n0_g = gradient_sums_.n0;
   c.n0_l = laplacian_sums_.n0;
@@ -75,9 +74,6 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
   const int n = particle_count();
   const double l0 = p.particle_spacing;
   const double skin = kSkinOverL0 * l0;
-  const double largest_radius = std::max({p.radius_density_over_l0, p.radius_gradient_over_l0,
-                                          p.radius_laplacian_over_l0, p.collision_distance_ratio}) *
-                                l0;
   // Two particles that each moved less than half the skin are still listed if now in reach.
   bool valid = neighbours_valid_ && static_cast<int>(search_positions_.size()) == n;
   if (valid) {
@@ -91,7 +87,7 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
     valid = 4.0 * largest_move2 < skin * skin;
   }
   if (!valid) {
-    const double list_radius = largest_radius + skin;
+    const double list_radius = largest_influence_radius(p) + skin;
     include_.clear();
     const bool any_inactive = std::any_of(kinds_.begin(), kinds_.end(), is_inactive);
     std::vector<Eigen::Vector3d> active;

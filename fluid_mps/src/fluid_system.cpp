@@ -8,6 +8,7 @@
 
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
+#include "cosim/fluid_mps/operators.hpp"
 #include "cosim/fluid_mps/pressure_solver.hpp"
 
 // Loops run in parallel from 4096 items on (the `if` clauses below): under that the OpenMP
@@ -39,10 +40,7 @@ void validate(const MpsParameters& p) {
   require(p.compressibility >= 0.0, "compressibility must be >= 0");
   require(p.pressure_relaxation > 0.0 && p.pressure_relaxation <= 1.0,
           "pressure_relaxation must be in (0, 1]");
-  const double largest_radius = std::max({p.radius_density_over_l0, p.radius_gradient_over_l0,
-                                          p.radius_laplacian_over_l0, p.collision_distance_ratio}) *
-                                p.particle_spacing;
-  require(!p.periodic.enabled || p.periodic.length() >= 3.0 * largest_radius,
+  require(!p.periodic.enabled || p.periodic.length() >= 3.0 * largest_influence_radius(p),
           "periodic length must be at least three times the largest influence radius");
 }
 
@@ -121,15 +119,7 @@ void FluidSystem::initialise() {
   }
   StepReport unused;
   update_neighbours(positions_, unused);
-  number_densities_.assign(n, 0.0);
-  const double re_n = p.radius_density_over_l0 * l0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const int particle = static_cast<int>(i);
-    for (int k = neighbours_.begin(particle); k < neighbours_.end(particle); ++k) {
-      if (neighbours_.distance[k] < re_n)
-        number_densities_[i] += weight(neighbours_.distance[k], re_n);
-    }
-  }
+  number_densities_ = number_density(positions_, neighbours_, p.radius_density_over_l0 * l0);
 }
 
 double FluidSystem::hierarchy_radius() const {

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -139,6 +140,13 @@ struct MpsParameters {
   PeriodicBoundary periodic;
   std::vector<PartitionSegment> partitions;
 };
+
+// The largest reach of any operator [m]: influence radii and the collision distance.
+inline double largest_influence_radius(const MpsParameters& p) {
+  return std::max({p.radius_density_over_l0, p.radius_gradient_over_l0, p.radius_laplacian_over_l0,
+                   p.collision_distance_ratio}) *
+         p.particle_spacing;
+}
 
 // Seed 001's tuned set for its fishway (Run-PF-6): d_cr = 1.0, C_c = -0.8 and a gradient radius
 // of 8.0 l0. Walls then need at least 8 layers of pressure-carrying particles.
