@@ -17,6 +17,20 @@ using Element = DemWorld::Element;
 // machine a barrier can stall for a scheduler slice).
 constexpr int kParallelThreshold = 4096;
 
+// The contact law of a pair from the compact velocity copies (evaluate() without the Element
+// reads): levers from each anchor to the contact point, relative velocity at that point.
+// d: displacement from B's anchor to A's.
+template <class HotVelocity>
+void apply_law_at_contact_point(ContactPair& p, const ContactGeometry& g, const Eigen::Vector3d& d,
+                                const HotVelocity& va, const HotVelocity& vb, double dt,
+                                bool clip) {
+  p.lever_a = g.point - d;
+  p.lever_b = g.point;
+  const Eigen::Vector3d velocity_a = va.velocity + va.angular_velocity.cross(p.lever_a);
+  const Eigen::Vector3d velocity_b = vb.velocity + vb.angular_velocity.cross(p.lever_b);
+  apply_contact_law(p, g, velocity_a - velocity_b, dt, clip);
+}
+
 // d: displacement from B's anchor to A's (DemWorld::displacement(a, b)).
 ContactGeometry pair_geometry(const DemWorld& world, int ia, int ib, PairKind kind,
                               const Eigen::Vector3d& d) {
@@ -205,13 +219,7 @@ void DemWorld::compute_forces(double dt) {
     }
     p = candidate_pair(k);
     // evaluate() on the compact copies; B is a sphere or cylinder here, never a triangle.
-    const HotVelocity& va = hot_velocity_[slot.a];
-    const HotVelocity& vb = hot_velocity_[slot.b];
-    p.lever_a = g.point - d;
-    p.lever_b = g.point;
-    const Eigen::Vector3d velocity_a = va.velocity + va.angular_velocity.cross(p.lever_a);
-    const Eigen::Vector3d velocity_b = vb.velocity + vb.angular_velocity.cross(p.lever_b);
-    apply_contact_law(p, g, velocity_a - velocity_b, dt, clip);
+    apply_law_at_contact_point(p, g, d, hot_velocity_[slot.a], hot_velocity_[slot.b], dt, clip);
     p.overlap_ratio =
         g.overlap / std::min(hot_position_[slot.a].radius, hot_position_[slot.b].radius);
     state.tangential_spring = p.tangential_spring;
@@ -309,13 +317,7 @@ void DemWorld::compute_forces(double dt) {
         ContactPair& p = triangle_pairs_[k];
         const ContactGeometry& g = geometry[k - begin];
         const Eigen::Vector3d d = hot_displacement(p.a, p.b);
-        const HotVelocity& va = hot_velocity_[p.a];
-        const HotVelocity& vb = hot_velocity_[p.b];
-        p.lever_a = g.point - d;
-        p.lever_b = g.point;
-        const Eigen::Vector3d velocity_a = va.velocity + va.angular_velocity.cross(p.lever_a);
-        const Eigen::Vector3d velocity_b = vb.velocity + vb.angular_velocity.cross(p.lever_b);
-        apply_contact_law(p, g, velocity_a - velocity_b, dt, clip);
+        apply_law_at_contact_point(p, g, d, hot_velocity_[p.a], hot_velocity_[p.b], dt, clip);
         p.overlap_ratio = g.overlap / hot_position_[p.a].radius;
       } else {
         release(triangle_pairs_[k]);
