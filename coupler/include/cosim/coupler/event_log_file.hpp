@@ -1,0 +1,123 @@
+// The event log on disk: LCM log events (the byte format of lcm-logger) in zstd-compressed
+// blocks, so a run's traffic takes a fraction of its raw size and `zstd -d` still turns the file
+// into a plain .lcmlog that LCM's own tools read.
+//
+// Layout (every part a zstd frame, so the file is a valid .zst stream):
+//   per block: a skippable frame "block header" (tag, compressed and raw size, first and last
+//              coupling window, first event number) followed by one zstd frame with a content
+//              checksum holding whole events;
+//   at the end: a skippable frame "index" listing each block's file offset and windows.
+// A reader streams block by block from the headers alone (a run cut short, without its index,
+// stays readable up to its last whole block), and seeks to a window through the index.
+// Plain .lcmlog files (runs recorded before compression, or decompressed ones) are read too.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cosim::coupler {
+
+// A file that cannot be read as an event log, with what and where (byte offset) it is damaged.
+class EventLogError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct LoggedEvent {
+  int64_t number = 0;     // event number, from 0 in file order
+  int64_t timestamp = 0;  // [us] when the coupler heard it
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+struct EventLogBlock {
+  uint64_t offset = 0;  // file offset of the block header
+  uint64_t compressed_size = 0;
+  uint64_t raw_size = 0;
+  int64_t first_window = 0, last_window = 0;
+  int64_t first_event = 0;
+};
+
+class EventLogWriter {
+ public:
+  // Raw bytes gathered before a block is compressed and written; larger blocks compress better,
+  // smaller ones lose less if the writer is killed.
+  static constexpr std::size_t kBlockBytes = std::size_t{1} << 20;
+
+  explicit EventLogWriter(const std::filesystem::path& file, int compression_level = 3);
+  ~EventLogWriter();  // closes if close() was not called; errors are then only logged
+  EventLogWriter(const EventLogWriter&) = delete;
+  EventLogWriter& operator=(const EventLogWriter&) = delete;
+
+  // One event of coupling window `window` (windows only grow over a run).
+  void append(const std::string& channel, const void* data, std::size_t size, int64_t utime,
+              int64_t window);
+  // Writes the pending block and the index and closes the file. Throws naming the file and the
+  // cause (e.g. "No space left on device").
+  void close();
+
+  int64_t events() const { return event_number_; }
+  uint64_t raw_bytes() const { return raw_bytes_; }
+  uint64_t file_bytes() const { return file_offset_; }
+
+ private:
+  void flush_block();
+  void write_bytes(const void* data, std::size_t size);
+
+  std::filesystem::path file_;
+  int level_;
+  std::FILE* out_ = nullptr;
+  std::vector<uint8_t> block_;
+  std::vector<EventLogBlock> index_;
+  EventLogBlock pending_;
+  int64_t event_number_ = 0;
+  uint64_t raw_bytes_ = 0, file_offset_ = 0;
+};
+
+class EventLogReader {
+ public:
+  explicit EventLogReader(const std::filesystem::path& file);
+  ~EventLogReader();
+  EventLogReader(const EventLogReader&) = delete;
+  EventLogReader& operator=(const EventLogReader&) = delete;
+
+  // The next event in file order, or nothing at the clean end. Throws EventLogError naming the
+  // file, the byte offset and what is wrong when the file is damaged.
+  std::optional<LoggedEvent> next();
+  // Continue from the first block that may hold `window` (the index, or a scan of the block
+  // headers when the index is missing). Events of earlier windows in that block still come.
+  void seek_window(int64_t window);
+
+  bool compressed() const { return compressed_; }
+  // The blocks of a compressed log (from the index, else from a scan); empty for plain logs.
+  const std::vector<EventLogBlock>& blocks();
+
+ private:
+  bool load_block(uint64_t offset);
+  std::optional<LoggedEvent> next_plain();
+  void scan_blocks();
+  [[noreturn]] void damaged(uint64_t offset, const std::string& what) const;
+
+  std::filesystem::path file_;
+  std::FILE* in_ = nullptr;
+  uint64_t file_size_ = 0;
+  bool compressed_ = false;
+  std::vector<uint8_t> block_;  // decompressed events of the current block
+  std::size_t block_cursor_ = 0;
+  uint64_t block_offset_ = 0, next_block_offset_ = 0;
+  std::vector<EventLogBlock> blocks_;
+  bool blocks_known_ = false;
+  uint64_t plain_offset_ = 0;
+};
+
+// The run's event log file in `run_dir`: events.lcmlog.zst, or events.lcmlog for runs recorded
+// before compression; nothing when neither exists.
+std::optional<std::filesystem::path> find_event_log(const std::filesystem::path& run_dir);
+
+}  // namespace cosim::coupler

@@ -1,0 +1,229 @@
+// The compressed event log: events come back byte for byte, the file is a valid zstd stream
+// whose content is a plain LCM log, seeking by window uses the index (or the block headers when
+// the index is missing), and damage or a full disk is named with the file and byte offset.
+#include <gtest/gtest.h>
+#include <zstd.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <unistd.h>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "cosim/coupler/event_log_file.hpp"
+
+namespace cosim::coupler {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Sample {
+  std::string channel;
+  std::vector<uint8_t> data;
+  int64_t utime, window;
+};
+
+// Events like a run's: a window number in front, then doubles that vary smoothly (fields) and
+// some noise, so the data compresses as real traffic does, not perfectly.
+std::vector<Sample> samples(int windows, int per_window) {
+  std::vector<Sample> out;
+  std::mt19937 random(7);
+  std::normal_distribution<double> noise(0.0, 1e-3);
+  for (int w = 0; w < windows; ++w) {
+    for (int e = 0; e < per_window; ++e) {
+      Sample s;
+      s.channel = e % 3 == 0 ? "COSIM_STATUS" : "COSIM_FIELD";
+      s.window = w;
+      s.utime = 1'000'000 + 1000 * w + e;
+      std::vector<double> values(200 + 50 * (e % 4));
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        values[i] = std::sin(0.01 * static_cast<double>(i) + 0.1 * w) + noise(random);
+      }
+      s.data.resize(8 + values.size() * sizeof(double));
+      std::memcpy(s.data.data(), &s.window, 8);
+      std::memcpy(s.data.data() + 8, values.data(), values.size() * sizeof(double));
+      out.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
+fs::path test_directory() {
+  return fs::temp_directory_path() / ("cosim_event_log_" + std::to_string(getpid()));
+}
+
+fs::path temporary(const std::string& name) {
+  fs::create_directories(test_directory());
+  return test_directory() / name;
+}
+
+class RemoveTestFiles : public ::testing::Environment {
+ public:
+  void TearDown() override { fs::remove_all(test_directory()); }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new RemoveTestFiles);
+
+void write_log(const fs::path& file, const std::vector<Sample>& events) {
+  EventLogWriter writer(file);
+  for (const auto& s : events)
+    writer.append(s.channel, s.data.data(), s.data.size(), s.utime, s.window);
+  writer.close();
+}
+
+int64_t window_of(const LoggedEvent& event) {
+  int64_t window = 0;
+  std::memcpy(&window, event.data.data(), 8);
+  return window;
+}
+
+TEST(EventLogFile, EventsComeBackByteForByteInSeveralBlocks) {
+  const auto events = samples(120, 12);  // about 3 MB raw
+  const fs::path file = temporary("round_trip.lcmlog.zst");
+  write_log(file, events);
+  EventLogReader reader(file);
+  EXPECT_TRUE(reader.compressed());
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const auto event = reader.next();
+    ASSERT_TRUE(event) << "event " << i << " missing";
+    EXPECT_EQ(event->number, static_cast<int64_t>(i));
+    EXPECT_EQ(event->timestamp, events[i].utime);
+    EXPECT_EQ(event->channel, events[i].channel);
+    ASSERT_EQ(event->data, events[i].data) << "event " << i;
+  }
+  EXPECT_FALSE(reader.next());
+  EXPECT_GE(reader.blocks().size(), 3u);
+  EXPECT_EQ(reader.blocks().front().first_window, 0);
+  EXPECT_EQ(reader.blocks().back().last_window, 119);
+}
+
+TEST(EventLogFile, DecompressedWithZstdIsAPlainLcmLog) {
+  const auto events = samples(40, 6);
+  const fs::path file = temporary("plain_check.lcmlog.zst");
+  write_log(file, events);
+  // Decompress the whole file as any zstd tool would (skippable frames are skipped).
+  std::ifstream in(file, std::ios::binary);
+  const std::vector<char> packed((std::istreambuf_iterator<char>(in)), {});
+  ZSTD_DStream* stream = ZSTD_createDStream();
+  ZSTD_initDStream(stream);
+  std::vector<char> plain;
+  std::vector<char> buffer(ZSTD_DStreamOutSize());
+  ZSTD_inBuffer input{packed.data(), packed.size(), 0};
+  while (input.pos < input.size) {
+    ZSTD_outBuffer output{buffer.data(), buffer.size(), 0};
+    const std::size_t result = ZSTD_decompressStream(stream, &output, &input);
+    ASSERT_FALSE(ZSTD_isError(result)) << ZSTD_getErrorName(result);
+    plain.insert(plain.end(), buffer.data(), buffer.data() + output.pos);
+  }
+  ZSTD_freeDStream(stream);
+  const fs::path lcm_file = temporary("plain_check.lcmlog");
+  std::ofstream(lcm_file, std::ios::binary).write(plain.data(), static_cast<long>(plain.size()));
+  lcm::LogFile log(lcm_file.string(), "r");
+  ASSERT_TRUE(log.good());
+  std::size_t count = 0;
+  while (const lcm::LogEvent* event = log.readNextEvent()) {
+    ASSERT_LT(count, events.size());
+    EXPECT_EQ(event->channel, events[count].channel);
+    ASSERT_EQ(static_cast<std::size_t>(event->datalen), events[count].data.size());
+    EXPECT_EQ(std::memcmp(event->data, events[count].data.data(), events[count].data.size()), 0);
+    ++count;
+  }
+  EXPECT_EQ(count, events.size());
+  // And our reader takes the plain file as well (runs recorded before compression).
+  EventLogReader reader(lcm_file);
+  EXPECT_FALSE(reader.compressed());
+  std::size_t again = 0;
+  while (const auto event = reader.next()) EXPECT_EQ(event->data, events[again++].data);
+  EXPECT_EQ(again, events.size());
+}
+
+TEST(EventLogFile, SeekingToAWindowStartsAtItsBlock) {
+  const auto events = samples(120, 12);
+  const fs::path file = temporary("seek.lcmlog.zst");
+  write_log(file, events);
+  EventLogReader reader(file);
+  reader.seek_window(90);
+  const auto first = reader.next();
+  ASSERT_TRUE(first);
+  EXPECT_LE(window_of(*first), 90);
+  EXPECT_GT(window_of(*first), 0) << "the seek read from the start";
+  int64_t last = window_of(*first);
+  bool reached = false;
+  while (const auto event = reader.next()) {
+    EXPECT_GE(window_of(*event), last);
+    last = window_of(*event);
+    reached = reached || last == 90;
+  }
+  EXPECT_TRUE(reached);
+}
+
+TEST(EventLogFile, ACutShortLogYieldsItsWholeBlocksThenNamesTheCut) {
+  const auto events = samples(120, 12);
+  const fs::path file = temporary("cut.lcmlog.zst");
+  write_log(file, events);
+  const auto size = fs::file_size(file);
+  fs::resize_file(file, size / 2);  // inside a block, the index gone
+  EventLogReader reader(file);
+  EXPECT_GE(reader.blocks().size(), 1u);  // found by walking the block headers
+  std::size_t count = 0;
+  try {
+    while (reader.next()) ++count;
+    FAIL() << "a cut log read to its end";
+  } catch (const EventLogError& error) {
+    EXPECT_NE(std::string(error.what()).find("cut short"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find(file.string()), std::string::npos) << error.what();
+  }
+  EXPECT_GT(count, 0u);
+  EXPECT_LT(count, events.size());
+}
+
+TEST(EventLogFile, ACorruptedByteIsNamedWithItsBlock) {
+  const auto events = samples(60, 12);
+  const fs::path file = temporary("corrupt.lcmlog.zst");
+  write_log(file, events);
+  {
+    std::fstream io(file, std::ios::binary | std::ios::in | std::ios::out);
+    io.seekp(200);  // inside the first compressed frame
+    char byte = 0;
+    io.read(&byte, 1);
+    io.seekp(200);
+    byte = static_cast<char>(byte ^ 0x5a);
+    io.write(&byte, 1);
+  }
+  EventLogReader reader(file);
+  try {
+    while (reader.next()) {
+    }
+    FAIL() << "a corrupted log read to its end";
+  } catch (const EventLogError& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("damaged at byte"), std::string::npos) << what;
+    EXPECT_NE(what.find("windows 0-"), std::string::npos) << what;
+  }
+}
+
+TEST(EventLogFile, NotAnEventLogIsRefused) {
+  const fs::path file = temporary("not_a_log.lcmlog.zst");
+  std::ofstream(file) << "name: not a log\n";
+  EXPECT_THROW(EventLogReader{file}, EventLogError);
+}
+
+TEST(EventLogFile, AFullDiskIsNamed) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const auto events = samples(2, 2);
+  try {
+    EventLogWriter writer("/dev/full");
+    for (const auto& s : events) {
+      writer.append(s.channel, s.data.data(), s.data.size(), s.utime, s.window);
+    }
+    writer.close();
+    FAIL() << "writing to /dev/full succeeded";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("No space left on device"), std::string::npos)
+        << error.what();
+    EXPECT_NE(std::string(error.what()).find("/dev/full"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace cosim::coupler
