@@ -2,8 +2,8 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
-#include <sys/prctl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,6 +15,7 @@
 namespace cosim::coupler {
 
 std::string ChildExit::describe() const {
+  if (interrupted) return fmt::format("the run was interrupted by SIG{}", sigabbrev_np(signal));
   if (signaled)
     return fmt::format("'{}' was killed by signal {} ({})", name, signal, strsignal(signal));
   return fmt::format("'{}' exited with code {}", name, exit_code);
@@ -53,6 +54,11 @@ void ProcessGroup::start(const std::string& name, const std::vector<std::string>
     // Child: its own process group so a terminal Ctrl-C reaches the launcher, which then stops
     // the solvers in order.
     setpgid(0, 0);
+    // The launcher holds SIGINT and SIGTERM for its watcher thread; a blocked mask survives
+    // exec, and a solver must die of SIGTERM when the launcher stops it.
+    sigset_t none;
+    sigemptyset(&none);
+    sigprocmask(SIG_SETMASK, &none, nullptr);
     // A launcher killed without cleaning up must not leave solvers computing for nobody.
     prctl(PR_SET_PDEATHSIG, SIGTERM);
     dup2(log_fd, STDOUT_FILENO);
@@ -65,8 +71,18 @@ void ProcessGroup::start(const std::string& name, const std::vector<std::string>
   children_.push_back(Child{name, pid, false});
 }
 
+void ProcessGroup::interrupt(int signal) {
+  interrupt_signal_.store(signal);
+}
+
 std::vector<ChildExit> ProcessGroup::poll_exits() {
   std::vector<ChildExit> exits;
+  if (const int signal = interrupt_signal_.exchange(0); signal != 0) {
+    ChildExit exit{"cosim"};
+    exit.signal = signal;
+    exit.interrupted = true;
+    exits.push_back(exit);
+  }
   for (auto& child : children_) {
     if (child.exited) continue;
     int status = 0;

@@ -1,9 +1,13 @@
 #include "dem_config.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <string>
 #include <tuple>
 #include <utility>
+
+#include "cosim/scenario/parameter_reader.hpp"
 
 namespace cosim::dem {
 
@@ -13,13 +17,8 @@ namespace {
 
 Material parse_material(scenario::Section section, Material defaults) {
   Material m = defaults;
-  m.density = section.number("density", m.density, Range::positive());
-  m.normal_stiffness = section.number("normal_stiffness", m.normal_stiffness, Range::positive());
-  m.tangential_stiffness =
-      section.number("tangential_stiffness", m.tangential_stiffness, Range::non_negative());
-  m.damping_ratio = section.number("damping_ratio", m.damping_ratio, Range::between(0.0, 1.0));
-  m.restitution = section.number("restitution", m.restitution, Range::between(0.0, 1.0));
-  m.friction = section.number("friction", m.friction, Range::non_negative());
+  scenario::read_parameters(section, m);  // the keys declared in dem_parameters.hpp
+  scenario::check_at_keys(section, [&] { validate_material(m); });
   return m;
 }
 
@@ -27,54 +26,6 @@ Material parse_material(scenario::Section section, Material defaults) {
 // unknown.
 void forbid(scenario::Section& section, const std::string& key, const std::string& needs) {
   if (section.has(key)) section.fail(key, "only used with " + needs);
-}
-
-// Drag law, pressure gradient, added mass and voidage correction (DemParameters, dem_world.hpp).
-// Seed 004's law keeps its buoyancy-only defaults; the Schiller-Naumann set defaults to the full
-// unresolved CFD-DEM force set.
-void parse_fluid_forces(scenario::Section& section, DemParameters& p) {
-  const std::string law = section.text("drag_law", "seed004", {"seed004", "schiller_naumann"});
-  const bool seed = law == "seed004";
-  p.drag_law = seed ? DragLaw::kSeed004 : DragLaw::kSchillerNaumann;
-  p.fluid_density = section.number("fluid_density", p.fluid_density, Range::non_negative());
-  if (seed) {
-    p.drag_coefficient_sphere =
-        section.number("drag_coefficient_sphere", p.drag_coefficient_sphere, Range::non_negative());
-    p.drag_coefficient_cylinder = section.number(
-        "drag_coefficient_cylinder", p.drag_coefficient_cylinder, Range::non_negative());
-    forbid(section, "fluid_viscosity", "drag_law: schiller_naumann");
-  } else {
-    forbid(section, "drag_coefficient_sphere", "drag_law: seed004");
-    forbid(section, "drag_coefficient_cylinder", "drag_law: seed004");
-    // Pa s; from superfluid helium to bitumen, so a unit slip (mPa s for Pa s) shows up.
-    p.fluid_viscosity =
-        section.number("fluid_viscosity", p.fluid_viscosity, Range{1e-7, 1e6, false});
-  }
-  p.voidage_correction = section.flag("voidage_correction", false);
-  if (p.voidage_correction) {
-    if (seed) section.fail("voidage_correction", "needs drag_law: schiller_naumann");
-    p.voidage_radius = section.number("voidage_radius", Range::positive());  // m
-  } else {
-    forbid(section, "voidage_radius", "voidage_correction: true");
-  }
-  p.fluid_acceleration_force = section.flag("fluid_acceleration_force", !seed);
-  p.added_mass = section.flag("added_mass", !seed);
-  // Added-mass coefficients: 0 (none) up to 5, beyond any rigid body's in unbounded fluid
-  // (a flat plate broadside, per its volume, excepted).
-  const Range coefficient = Range::between(0.0, 5.0);
-  if (p.added_mass) {
-    p.added_mass_sphere =
-        section.number("added_mass_coefficient", p.added_mass_sphere, coefficient);
-    p.added_mass_cylinder_normal = section.number("added_mass_coefficient_log_normal",
-                                                  p.added_mass_cylinder_normal, coefficient);
-    p.added_mass_cylinder_axial = section.number("added_mass_coefficient_log_axial",
-                                                 p.added_mass_cylinder_axial, coefficient);
-  } else {
-    for (const char* key : {"added_mass_coefficient", "added_mass_coefficient_log_normal",
-                            "added_mass_coefficient_log_axial"}) {
-      forbid(section, key, "added_mass: true");
-    }
-  }
 }
 
 // The seed 004 flume with its bed roughness and check dam.
@@ -138,15 +89,20 @@ void parse_packing(scenario::Section& section, DebrisConfig& config) {
   auto packing = section.child("packing");
   PackingSpec spec;
   std::tie(spec.box_min, spec.box_max) = parse_corners(packing, "box_min", "box_max");
+  scenario::MemoryBudget memory("debris_dem");
   for (auto& entry : packing.list("spheres")) {
     SphereClass sphere_class{entry.number("diameter", Range::positive()),
                              entry.integer("count", Range::between(0, 1e7))};
+    memory.add(entry, "count", sphere_class.count * kBytesPerElement,
+               fmt::format("{} spheres x {:g} B", sphere_class.count, kBytesPerElement));
     config.sphere_classes.push_back(sphere_class);
     for (int i = 0; i < sphere_class.count; ++i) {
       spec.sphere_diameters.push_back(sphere_class.diameter);
     }
   }
   spec.log_count = packing.integer("log_count", 0, Range::between(0, 1e6));
+  memory.add(packing, "log_count", spec.log_count * kBytesPerElement,
+             fmt::format("{} logs x {:g} B", spec.log_count, kBytesPerElement));
   spec.log_diameter = packing.number("log_diameter", 0.01, Range::positive());
   spec.log_length = packing.number("log_length", 0.1, Range::positive());
   spec.seed = static_cast<unsigned>(packing.integer("seed", 1, Range::non_negative()));
@@ -227,25 +183,15 @@ DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& sce
   DebrisConfig config;
   DemParameters& p = config.parameters;
   p.gravity = scene.world.gravity;  // the scene's one gravity (a flume: world.slope_degrees)
-  parse_fluid_forces(section, p);
-  p.user_dt = section.number("substep", 1.0e-5, Range::non_negative());
-  p.safety_factor = section.number("safety_factor", p.safety_factor, Range{0.0, 1.0, true});
-  p.list_margin = section.number("list_margin", p.list_margin, Range::positive());
-  // Absent: the list is rebuilt on displacement only (an infinite interval, which the resolved
-  // scenario could not hold as a finite number).
-  if (section.has("list_reset_interval")) {
-    p.list_reset_interval = section.number("list_reset_interval", Range::positive());
-  }
-  p.max_overlap_ratio =
-      section.number("max_overlap_ratio", p.max_overlap_ratio, Range{0.0, 1.0, true});
+  // Drag law, fluid forces and numerics: the keys declared in dem_parameters.hpp.
+  scenario::read_parameters(section, p);
+  scenario::check_at_keys(section, [&] { validate_parameters(p); });
 
-  Material debris_defaults;  // seed 004 table 3: s.g. 1.9
-  Material log_defaults;
-  log_defaults.density = 800.0;  // s.g. 0.8
   auto materials = section.optional_child("materials");
-  config.debris = parse_material(materials.optional_child("debris"), debris_defaults);
-  config.logs = parse_material(materials.optional_child("logs"), log_defaults);
-  config.structure = parse_material(materials.optional_child("structure"), debris_defaults);
+  config.debris = parse_material(materials.optional_child("debris"), default_debris_material());
+  config.logs = parse_material(materials.optional_child("logs"), default_log_material());
+  config.structure =
+      parse_material(materials.optional_child("structure"), default_debris_material());
 
   parse_flume(section, config);
   parse_box(section, config);

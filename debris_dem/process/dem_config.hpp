@@ -8,7 +8,7 @@
 //   packing: {...}; gate: {x, settle_time}       the gate needs the flume and the packing
 //   elements: [{kind: sphere | log, center, diameter > 0, length > 0 (logs), axis != 0 (logs),
 //               density > 0, velocity (default 0)}]   contact constants of materials.debris/logs
-// Fluid forces (DemParameters in dem_world.hpp):
+// Fluid forces (DemParameters, keys declared in dem_parameters.hpp; `cosim keys debris_dem`):
 //   drag_law: seed004 (default) | schiller_naumann
 //   drag_coefficient_sphere, drag_coefficient_cylinder >= 0      seed004 only
 //   fluid_viscosity in [1e-7, 1e6] Pa s (default 1e-3)            schiller_naumann only

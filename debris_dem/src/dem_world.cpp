@@ -12,7 +12,26 @@ double Material::effective_damping_ratio(bool clipped) const {
   return damping_ratio;
 }
 
-DemWorld::DemWorld(DemParameters parameters) : parameters_(std::move(parameters)) {}
+void validate_parameters(const DemParameters& p) {
+  scenario::check_parameters(p, "DemParameters");
+}
+
+void validate_material(const Material& m) {
+  scenario::check_parameters(m, "Material");
+  try {
+    (void)m.effective_damping_ratio(true);
+    (void)m.effective_damping_ratio(false);
+  } catch (const std::invalid_argument&) {
+    throw scenario::ParameterError(
+        "Material", "restitution",
+        "value " + scenario::format_number(m.restitution) +
+            " is below what any damping ratio gives (about 1e-16): use 0 and set damping_ratio");
+  }
+}
+
+DemWorld::DemWorld(DemParameters parameters) : parameters_(std::move(parameters)) {
+  validate_parameters(parameters_);
+}
 DemWorld::~DemWorld() = default;
 DemWorld::DemWorld(DemWorld&&) noexcept = default;
 DemWorld& DemWorld::operator=(DemWorld&&) noexcept = default;
@@ -26,6 +45,7 @@ int DemWorld::material_index(const Material& m) {
       return i;
     }
   }
+  validate_material(m);
   materials_.push_back(m);
   damping_clipped_.push_back(m.effective_damping_ratio(true));
   damping_unclipped_.push_back(m.effective_damping_ratio(false));

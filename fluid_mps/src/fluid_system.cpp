@@ -14,37 +14,16 @@
 // Loops run in parallel from 4096 items on (the `if` clauses below): under that the OpenMP
 // fork/join costs more than the work, and oversubscribed CI cores make it far worse.
 namespace cosim::mps {
-namespace {
 
-void validate(const MpsParameters& p) {
-  auto require = [](bool ok, const char* what) {
-    if (!ok) throw std::invalid_argument(std::string("MpsParameters: ") + what);
-  };
-  require(p.dimension == 2 || p.dimension == 3, "dimension must be 2 or 3");
-  require(p.particle_spacing > 0.0, "particle_spacing must be positive");
-  require(p.density > 0.0, "density must be positive");
-  require(p.kinematic_viscosity >= 0.0, "kinematic_viscosity must be >= 0");
-  require(p.radius_density_over_l0 > 1.0 && p.radius_gradient_over_l0 > 1.0 &&
-              p.radius_laplacian_over_l0 > 1.0,
-          "influence radii must exceed l0");
-  require(p.multigrid_radius_over_l0 > 1.0, "multigrid_radius_over_l0 must exceed 1");
-  require(p.surface_threshold > 0.0 && p.surface_threshold < 1.0,
-          "surface_threshold must be in (0, 1)");
-  require(p.collision_distance_ratio >= 0.0 && p.collision_distance_ratio <= 1.5,
-          "collision_distance_ratio must be in [0, 1.5]");
-  require(p.collision_restitution >= -1.0 && p.collision_restitution <= 1.0,
-          "collision_restitution must be in [-1, 1]");
-  require(p.courant > 0.0 && p.courant <= 1.0, "courant must be in (0, 1]");
-  require(p.max_dt > 0.0, "max_dt must be positive");
-  require(p.pcg_tolerance > 0.0 && p.pcg_max_iterations > 0, "PCG tolerance and iterations");
-  require(p.compressibility >= 0.0, "compressibility must be >= 0");
-  require(p.pressure_relaxation > 0.0 && p.pressure_relaxation <= 1.0,
-          "pressure_relaxation must be in (0, 1]");
-  require(!p.periodic.enabled || p.periodic.length() >= 3.0 * largest_influence_radius(p),
-          "periodic length must be at least three times the largest influence radius");
+void validate_parameters(const MpsParameters& p) {
+  scenario::check_parameters(p, "MpsParameters");
+  // The seam is set by the scene builders, not by a key.
+  if (p.periodic.enabled && p.periodic.length() < 3.0 * largest_influence_radius(p)) {
+    throw scenario::ParameterError(
+        "MpsParameters", "periodic",
+        "the period must be at least three times the largest influence radius");
+  }
 }
-
-}  // namespace
 
 FluidSystem::FluidSystem(MpsParameters parameters, ParticleSet particles)
     : parameters_(std::move(parameters)),
@@ -71,7 +50,7 @@ FluidSystem::FluidSystem(MpsParameters parameters, const MpsState& state)
 }
 
 void FluidSystem::initialise() {
-  validate(parameters_);
+  validate_parameters(parameters_);
   const std::size_t n = positions_.size();
   if (kinds_.size() != n || velocities_.size() != n) {
     throw std::invalid_argument("FluidSystem: positions, kinds and velocities differ in size");

@@ -31,11 +31,24 @@ herr_t take_innermost(unsigned n, const H5E_error2_t* err, void* data) {
   return 0;
 }
 
+// HDF5's file driver reports a failed system call as "file write failed: time = ..., filename
+// = ..., errno = 28, error message = 'No space left on device', buf = 0x..., ...": keep what
+// names the cause, drop the clock, the pointers and the byte counts.
+std::string shorten_driver_message(const std::string& message) {
+  const std::string marker = "error message = '";
+  const auto start = message.find(marker);
+  if (start == std::string::npos) return message;
+  const auto end = message.find('\'', start + marker.size());
+  if (end == std::string::npos) return message;
+  const std::string cause = message.substr(start + marker.size(), end - start - marker.size());
+  return message.substr(0, message.find(':')) + ": " + cause;
+}
+
 std::string hdf5_message() {
   std::string message;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, take_innermost, &message);
   H5Eclear2(H5E_DEFAULT);
-  return message.empty() ? std::string() : " (" + message + ")";
+  return message.empty() ? std::string() : " (" + shorten_driver_message(message) + ")";
 }
 
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& object,

@@ -1,5 +1,7 @@
 #include "xdmf.hpp"
 
+#include "cosim/output/files.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -193,20 +195,10 @@ std::string render_xdmf(const std::string& title, const std::string& h5_name,
 }
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& content) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cosim_output: cannot create '" + tmp.string() + "'");
-    out << content;
-    out.flush();
-    if (!out) throw std::runtime_error("cosim_output: cannot write '" + tmp.string() + "'");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    throw std::runtime_error("cosim_output: cannot rename '" + tmp.string() + "' to '" +
-                             path.string() + "': " + ec.message());
+  try {
+    output::write_file_atomically(path, content);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(std::string("cosim_output: ") + error.what());
   }
 }
 

@@ -6,18 +6,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cosim/scenario/document.hpp"
+
 namespace cosim::scenario {
 
+// The checks on the file itself (kind, size, duplicate keys) live in document.cpp.
 YAML::Node load_yaml_file(const std::filesystem::path& file) {
-  if (!std::filesystem::exists(file)) {
-    throw ScenarioError(fmt::format("{}: file not found", file.string()));
-  }
-  try {
-    return YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& error) {
-    throw ScenarioError(
-        fmt::format("{}:{}: YAML syntax error: {}", file.string(), error.mark.line + 1, error.msg));
-  }
+  return load_document(file);
 }
 
 Section Section::root(const YAML::Node& node, const std::filesystem::path& file,
@@ -89,11 +84,7 @@ double Section::to_number(const YAML::Node& value, const std::string& key) const
 }
 
 void Section::check_range(const std::string& key, double value, const Range& range) const {
-  const bool below = range.min_exclusive ? value <= range.min : value < range.min;
-  if (below || value > range.max) {
-    fail(key, fmt::format("value {} is out of range {}{}, {}]", value,
-                          range.min_exclusive ? "(" : "[", range.min, range.max));
-  }
+  if (!range.contains(value)) fail(key, out_of_range(value, range));
 }
 
 double Section::number(const std::string& key, double fallback, Range range) {

@@ -2,9 +2,11 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdlib>
 
 #include "cosim_version.hpp"
+#include "keys_command.hpp"
 #include "network.hpp"
 #include "plot.hpp"
 #include "replay_command.hpp"
@@ -15,17 +17,44 @@ namespace {
 
 using namespace cosim;
 
+// The shape PARTICIPANT:KIND@WINDOW only; what the scene allows is checked against it
+// (tool::check_run_request), before any run folder is made.
 std::map<std::string, std::string> parse_faults(const std::vector<std::string>& faults) {
   std::map<std::string, std::string> parsed;
   for (const auto& fault : faults) {
     const auto colon = fault.find(':');
-    if (colon == std::string::npos || fault.find('@') == std::string::npos) {
-      throw CLI::ValidationError("--fault",
-                                 "expected PARTICIPANT:KIND@WINDOW, got '" + fault + "'");
+    if (colon == std::string::npos || colon == 0 || fault.find('@', colon) == std::string::npos) {
+      throw CLI::ValidationError(
+          "--fault",
+          "expected PARTICIPANT:KIND@WINDOW (e.g. vegetation_beam:exit@5), got '" + fault + "'");
     }
-    parsed[fault.substr(0, colon)] = fault.substr(colon + 1);
+    const std::string name = fault.substr(0, colon);
+    if (!parsed.emplace(name, fault.substr(colon + 1)).second) {
+      throw CLI::ValidationError("--fault", "'" + name + "' is given twice; one fault each");
+    }
   }
   return parsed;
+}
+
+// CLI::Range lets NaN through (every comparison with it is false): this one asks for a finite
+// number first.
+CLI::Validator finite_range(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        double value = 0.0;
+        std::size_t used = 0;
+        try {
+          value = std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size() || !std::isfinite(value) || value < low ||
+            value > high) {
+          return fmt::format("'{}' is not a finite number from {} to {}", text, low, high);
+        }
+        return "";
+      },
+      fmt::format("FINITE in [{} - {}]", low, high));
 }
 
 // Returns true when the caller should go on in this process.
@@ -61,7 +90,7 @@ int main(int argc, char** argv) {
     command
         ->add_option("--inject-loss", request.loss_probability,
                      "drop this fraction of the messages each process receives (testing)")
-        ->check(CLI::Range(0.0, 0.5));
+        ->check(finite_range(0.0, 0.5));
     command->add_option(
         "--fault", faults,
         "make a participant fail (testing): NAME:exit@W, NAME:hang@W, NAME:throw@W");
@@ -72,7 +101,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"auto", "host", "private"}));
     command
         ->add_option("--record", record,
-                     "what events.lcmlog keeps: all (replayable), control (windows and reports, "
+                     "what events.lcmlog.zst keeps: all (replayable), control (windows and reports, "
                      "no field values), none (no log)")
         ->check(CLI::IsMember({"all", "control", "none"}));
     command->add_flag("--quiet", quiet, "no progress lines");
@@ -80,7 +109,7 @@ int main(int argc, char** argv) {
         ->add_option("--progress-interval", request.progress_interval,
                      "seconds between progress lines (default: 1 on a terminal, where the line "
                      "is redrawn; 10 otherwise, as plain lines)")
-        ->check(CLI::Range(0.0, 86400.0));
+        ->check(finite_range(0.0, 86400.0));
   };
 
   auto* run = app.add_subcommand("run", "run a scenario bundle");
@@ -122,6 +151,7 @@ int main(int argc, char** argv) {
       ->required();
   add_run_options(replay_command);
 
+  tool::add_keys_command(app);  // cosim keys [participant]: the key reference
   CLI11_PARSE(app, argc, argv);
   try {
     request.faults = parse_faults(faults);
@@ -136,8 +166,13 @@ int main(int argc, char** argv) {
     if (run->parsed()) {
       // Checked before the network, so a bad scenario is reported before anything starts.
       const auto scene = tool::load_with_overrides(bundle, overrides);
+      tool::check_run_request(scene, request);
       if (!ensure_network(network, argc, argv)) return 2;
       const auto outcome = tool::run_scene(scene, request);
+      if (outcome.interrupted_by != 0) {
+        fmt::print(stderr, "{}\n", tool::interruption_line(outcome));
+        return outcome.exit_code;
+      }
       tool::print_report(outcome.run_dir);
       return outcome.exit_code;
     }

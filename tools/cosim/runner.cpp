@@ -4,17 +4,27 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <fmt/ranges.h>
+#include <signal.h>
+#include <stdlib.h>
+
+#include <atomic>
+#include <charconv>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
-
-#include <stdlib.h>
+#include <stdexcept>
+#include <thread>
 
 #include "cosim/coupler/bus.hpp"
+#include "cosim/coupler/event_log.hpp"
 #include "cosim/coupler/process_main.hpp"
+#include "cosim/output/files.hpp"
 #include "progress.hpp"
 
 namespace cosim::tool {
@@ -42,9 +52,108 @@ std::filesystem::path make_run_dir(const std::filesystem::path& runs_dir, const 
 }
 
 void write_text(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream out(file);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + file.string());
+  output::write_file_atomically(file, text);
+}
+
+std::string signal_name(int signal) {
+  const char* abbreviation = sigabbrev_np(signal);
+  return abbreviation ? std::string("SIG") + abbreviation : fmt::format("signal {}", signal);
+}
+
+// Holds SIGINT and SIGTERM for the whole run and turns them into an interruption of the
+// process group, which the coupler handles like a failed child: ABORT to everyone, SIGTERM,
+// then SIGKILL for what is left. Blocking the signals in every thread of the run (the mask is
+// inherited by the threads started after it) and taking them in one watcher thread with
+// sigtimedwait keeps system calls elsewhere from failing with EINTR halfway.
+class InterruptWatch {
+ public:
+  explicit InterruptWatch(coupler::ProcessGroup& processes) : processes_(processes) {
+    sigemptyset(&signals_);
+    sigaddset(&signals_, SIGINT);
+    sigaddset(&signals_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &signals_, &previous_);
+    thread_ = std::thread([this] { watch(); });
+  }
+  ~InterruptWatch() {
+    stop_ = true;
+    thread_.join();
+    // A signal that came after the watcher stopped would kill the process once unblocked,
+    // after the run has ended and been written: take it here.
+    const timespec now{};
+    while (sigtimedwait(&signals_, nullptr, &now) > 0) {
+    }
+    pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
+  }
+  InterruptWatch(const InterruptWatch&) = delete;
+  InterruptWatch& operator=(const InterruptWatch&) = delete;
+  int signal() const { return signal_.load(); }
+
+ private:
+  void watch() {
+    const timespec tick{0, 100'000'000};
+    while (!stop_) {
+      const int got = sigtimedwait(&signals_, nullptr, &tick);
+      if (got <= 0) continue;
+      int none = 0;
+      // The first signal stops the run; repeats while it stops change nothing.
+      if (signal_.compare_exchange_strong(none, got)) processes_.interrupt(got);
+    }
+  }
+
+  coupler::ProcessGroup& processes_;
+  sigset_t signals_{};
+  sigset_t previous_{};
+  std::atomic<int> signal_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+void check_fault(const scenario::Scene& scene, const std::string& name, const std::string& spec) {
+  const std::string given = name + ":" + spec;
+  auto refuse = [&](const std::string& problem) {
+    throw std::invalid_argument(fmt::format("--fault '{}': {}", given, problem));
+  };
+  bool known = false;
+  std::vector<std::string> names;
+  for (const auto& entry : scene.participants) {
+    known |= entry.name == name || entry.acts_as == name;
+    names.push_back(entry.name);
+  }
+  if (!known) {
+    refuse(fmt::format("this scene runs no participant '{}' (it runs {})", name,
+                       fmt::join(names, ", ")));
+  }
+  const auto at = spec.find('@');
+  if (at == std::string::npos)
+    refuse("expected PARTICIPANT:KIND@WINDOW, e.g. vegetation_beam:exit@5");
+  const std::string kind = spec.substr(0, at);
+  const std::string window_text = spec.substr(at + 1);
+  const auto& kinds = fault_kinds();
+  if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) {
+    refuse(fmt::format("unknown kind '{}' (known kinds: {})", kind, fmt::join(kinds, ", ")));
+  }
+  const int64_t total = scene.total_windows();
+  int64_t window = 0;
+  const char* end = window_text.data() + window_text.size();
+  const auto parsed = std::from_chars(window_text.data(), end, window);
+  if (window_text.empty() || parsed.ec != std::errc() || parsed.ptr != end) {
+    refuse(fmt::format("the window '{}' is not a whole number (this scene has windows 1 to {})",
+                       window_text, total));
+  }
+  if (window < 1 || window > total) {
+    refuse(fmt::format("window {} is outside this scene's windows 1 to {}", window, total));
+  }
+}
+
+void check_executables(const scenario::Scene& scene) {
+  const auto bin = coupler::executable_dir();
+  for (const auto& entry : scene.participants) {
+    const auto executable = bin / entry.executable;
+    if (!std::filesystem::exists(executable)) {
+      throw std::runtime_error(fmt::format("the solver '{}' is not built: {} does not exist",
+                                           entry.executable, executable.string()));
+    }
+  }
 }
 
 nlohmann::json parse_metrics(const std::string& text) {
@@ -58,77 +167,25 @@ nlohmann::json parse_metrics(const std::string& text) {
 
 }  // namespace
 
-RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
-  RunOutcome outcome;
-  const int64_t run_id = new_run_id();
-  const std::string url = coupler::run_lcm_url(run_id);
-  const std::string label =
-      request.run_label.empty() ? scene.name : scene.name + "-" + request.run_label;
-  outcome.run_dir = make_run_dir(request.runs_dir, label, run_id);
-  const auto resolved_file = outcome.run_dir / "scenario.yaml";
-  {
-    YAML::Emitter emitter;
-    emitter << scene.resolved;
-    write_text(resolved_file, std::string("# Resolved scenario: every value this run used.\n") +
-                                  emitter.c_str() + "\n");
-  }
-  for (const auto& [name, fault] : request.faults) {
-    bool known = false;
-    for (const auto& entry : scene.participants)
-      known |= entry.name == name || entry.acts_as == name;
-    if (!known)
-      throw std::runtime_error(
-          fmt::format("--fault names '{}', which this scene does not run", name));
-  }
+const std::vector<std::string>& fault_kinds() {
+  static const std::vector<std::string> kinds{"exit", "hang", "throw"};
+  return kinds;
+}
 
-  coupler::CouplerOptions options;
-  options.url = url;
-  options.run_id = run_id;
-  if (request.record_mode != coupler::RecordMode::none) {
-    options.event_log = outcome.run_dir / "events.lcmlog";
+void check_run_request(const scenario::Scene& scene, const RunRequest& request) {
+  for (const auto& [name, spec] : request.faults) check_fault(scene, name, spec);
+  const double loss = request.loss_probability;
+  if (!std::isfinite(loss) || loss < 0.0 || loss > 0.5) {
+    throw std::invalid_argument(
+        fmt::format("--inject-loss {}: must be a finite fraction from 0 to 0.5", loss));
   }
-  options.record_mode = request.record_mode;
-  options.loss_probability = request.loss_probability;
-  // The progress lines (with an estimate of the time left) come from the monitor below, which
-  // listens to the coupler's window broadcasts.
-  coupler::Coupler coupler(scene, options);
-  std::optional<ProgressMonitor> progress;
-  if (request.show_progress) {
-    progress.emplace(ProgressMonitor::Options{url, run_id, label, scene.duration,
-                                              scene.total_windows(), request.progress_interval,
-                                              stderr});
-  }
+}
 
-  coupler::ProcessGroup processes;
-  const auto bin = coupler::executable_dir();
-  // Solvers share the machine with each other: OpenMP threads that spin while waiting would
-  // steal the cores their partners compute on (docs/performance.md, fluid_mps).
-  setenv("OMP_WAIT_POLICY", "passive", 0);
-  for (const auto& entry : scene.participants) {
-    const auto executable = bin / entry.executable;
-    if (!std::filesystem::exists(executable)) {
-      throw std::runtime_error(fmt::format("the solver '{}' is not built: {} does not exist",
-                                           entry.executable, executable.string()));
-    }
-    std::string fault;
-    if (auto found = request.faults.find(entry.name); found != request.faults.end())
-      fault = found->second;
-    if (auto found = request.faults.find(entry.acts_as); found != request.faults.end())
-      fault = found->second;
-    processes.start(
-        entry.name,
-        coupler::process_arguments(executable, resolved_file, outcome.run_dir, entry.name, url,
-                                   run_id, request.loss_probability, fault),
-        outcome.run_dir / "logs" / (entry.name + ".log"));
-  }
-  outcome.result = coupler.run(processes);
+namespace {
+
+nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& request,
+                          const RunOutcome& outcome, int64_t run_id, const std::string& url) {
   const auto& result = outcome.result;
-  if (progress) {
-    progress->finish(result.ok, result.windows_completed, result.simulated_time,
-                     result.wall_seconds);
-  }
-  outcome.exit_code = result.ok ? 0 : 1;
-
   nlohmann::json summary;
   summary["scene"] = scene.name;
   summary["scenario"] = scene.file.string();
@@ -136,6 +193,7 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   summary["lcm_url"] = url;
   summary["ok"] = result.ok;
   if (!result.ok) summary["failure"] = result.failure;
+  if (outcome.interrupted_by != 0) summary["interrupted_by"] = signal_name(outcome.interrupted_by);
   summary["scheme"] = scene.coupling.scheme;
   summary["duration"] = scene.duration;
   summary["simulated_time"] = result.simulated_time;
@@ -168,20 +226,138 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
                         {"gaps_detected", result.traffic.gaps_detected},
                         {"resends_requested", result.traffic.resends_requested}};
   // Wall time of windows 1..N that no participant's physics explains (coupler.hpp).
-  summary["coupling_overhead"] = {
-      {"windows_wall_seconds", result.windows_wall_seconds},
-      {"critical_physics_seconds", result.critical_physics_seconds},
-      {"overhead_seconds", result.overhead_seconds},
-      {"overhead_fraction", result.overhead_fraction},
-      {"overhead_ms_per_window", result.overhead_ms_per_window}};
-  write_text(outcome.run_dir / "summary.json", summary.dump(2) + "\n");
+  summary["coupling_overhead"] = {{"windows_wall_seconds", result.windows_wall_seconds},
+                                  {"critical_physics_seconds", result.critical_physics_seconds},
+                                  {"overhead_seconds", result.overhead_seconds},
+                                  {"overhead_fraction", result.overhead_fraction},
+                                  {"overhead_ms_per_window", result.overhead_ms_per_window}};
+  return summary;
+}
+
+// Starts every participant and runs the coupler over them. The coupler (and with it the event
+// log) is closed on return, so the log's write errors are known to the caller.
+void run_participants(const scenario::Scene& scene, const RunRequest& request,
+                      const coupler::CouplerOptions& options, const std::string& label,
+                      coupler::ProcessGroup& processes, RunOutcome& outcome) {
+  // The progress lines (with an estimate of the time left) come from the monitor below, which
+  // listens to the coupler's window broadcasts.
+  coupler::Coupler coupler(scene, options);
+  std::optional<ProgressMonitor> progress;
+  if (request.show_progress) {
+    progress.emplace(ProgressMonitor::Options{options.url, options.run_id, label, scene.duration,
+                                              scene.total_windows(), request.progress_interval,
+                                              stderr});
+  }
+  const auto bin = coupler::executable_dir();
+  const auto resolved_file = outcome.run_dir / "scenario.yaml";
+  // Solvers share the machine with each other: OpenMP threads that spin while waiting would
+  // steal the cores their partners compute on (docs/performance.md, fluid_mps).
+  setenv("OMP_WAIT_POLICY", "passive", 0);
+  for (const auto& entry : scene.participants) {
+    std::string fault;
+    if (auto found = request.faults.find(entry.name); found != request.faults.end())
+      fault = found->second;
+    if (auto found = request.faults.find(entry.acts_as); found != request.faults.end())
+      fault = found->second;
+    processes.start(entry.name,
+                    coupler::process_arguments(bin / entry.executable, resolved_file,
+                                               outcome.run_dir, entry.name, options.url,
+                                               options.run_id, request.loss_probability, fault),
+                    outcome.run_dir / "logs" / (entry.name + ".log"));
+  }
+  outcome.result = coupler.run(processes);
+  const auto& result = outcome.result;
+  if (progress) {
+    progress->finish(result.ok, result.windows_completed, result.simulated_time,
+                     result.wall_seconds);
+  }
+}
+
+}  // namespace
+
+RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
+  // Everything the command line got wrong is refused before the run folder exists.
+  check_run_request(scene, request);
+  check_executables(scene);
+  RunOutcome outcome;
+  const int64_t run_id = new_run_id();
+  const std::string url = coupler::run_lcm_url(run_id);
+  const std::string label =
+      request.run_label.empty() ? scene.name : scene.name + "-" + request.run_label;
+  outcome.run_dir = make_run_dir(request.runs_dir, label, run_id);
+  {
+    YAML::Emitter emitter;
+    emitter << scene.resolved;
+    write_text(
+        outcome.run_dir / "scenario.yaml",
+        std::string("# Resolved scenario: every value this run used.\n") + emitter.c_str() + "\n");
+  }
+  coupler::CouplerOptions options;
+  options.url = url;
+  options.run_id = run_id;
+  if (request.record_mode != coupler::RecordMode::none) {
+    options.event_log = outcome.run_dir / "events.lcmlog.zst";
+  }
+  options.record_mode = request.record_mode;
+  options.loss_probability = request.loss_probability;
+
+  coupler::ProcessGroup processes;
+  InterruptWatch watch(processes);
+  run_participants(scene, request, options, label, processes, outcome);
+  auto& result = outcome.result;
+  outcome.exit_code = result.ok ? 0 : 1;
+  if (const int signal = watch.signal(); signal != 0) {
+    const int64_t at = std::min(result.windows_completed + 1, result.total_windows);
+    result.ok = false;
+    result.failure = fmt::format("interrupted by {} at window {} of {}", signal_name(signal), at,
+                                 result.total_windows);
+    outcome.interrupted_by = signal;
+    outcome.exit_code = 128 + signal;
+  }
+  nlohmann::json summary = summary_of(scene, request, outcome, run_id, url);
+  if (!options.event_log.empty()) {
+    if (const auto error = coupler::EventRecorder::write_failure(options.event_log);
+        !error.empty()) {
+      summary["event_log_error"] = error;
+      if (result.ok) {
+        result.ok = false;
+        result.failure = error + " (every window ran, but the log is incomplete)";
+        summary["ok"] = false;
+        summary["failure"] = result.failure;
+        outcome.exit_code = 1;
+      }
+    }
+  }
+  try {
+    write_text(outcome.run_dir / "summary.json", summary.dump(2) + "\n");
+  } catch (const std::runtime_error& error) {
+    // The summary was where the outcome would be read: say it here instead.
+    fmt::print(stderr, "error: {}; the run {}\n", error.what(),
+               result.ok ? std::string("itself finished") : "failed: " + result.failure);
+    if (const auto log_error = coupler::EventRecorder::write_failure(options.event_log);
+        !log_error.empty() && log_error != result.failure) {
+      fmt::print(stderr, "error: {}\n", log_error);
+    }
+    if (outcome.exit_code == 0) outcome.exit_code = 1;
+  }
   return outcome;
 }
 
+std::string interruption_line(const RunOutcome& outcome) {
+  return fmt::format("cosim: {} ({} windows completed); every process stopped; run folder: {}",
+                     outcome.result.failure, outcome.result.windows_completed,
+                     outcome.run_dir.string());
+}
+
 void print_report(const std::filesystem::path& run_dir) {
-  std::ifstream in(run_dir / "summary.json");
-  const auto summary = nlohmann::json::parse(in);
   fmt::print("run folder: {}\n", run_dir.string());
+  std::ifstream in(run_dir / "summary.json");
+  const auto summary = nlohmann::json::parse(in, nullptr, false);
+  if (!summary.is_object()) {
+    // run_scene has said why (a full disk, say); the run folder is still worth naming.
+    fmt::print("FAILED: the run folder has no readable summary.json\n");
+    return;
+  }
   fmt::print("{}: {} windows, {:.4g} s simulated in {:.2f} s wall\n",
              summary["scene"].get<std::string>(), summary["windows_completed"].get<int64_t>(),
              summary["simulated_time"].get<double>(), summary["wall_seconds"].get<double>());
@@ -212,7 +388,7 @@ void print_report(const std::filesystem::path& run_dir) {
     }
   }
   if (!summary["ok"].get<bool>()) {
-    fmt::print("FAILED: {}\n", summary["failure"].get<std::string>());
+    fmt::print("FAILED: {}\n", summary.value("failure", std::string("(no reason recorded)")));
   }
 }
 

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "cosim/coupler/coupler.hpp"
 #include "cosim/scenario/scene.hpp"
@@ -15,8 +16,8 @@ const std::map<std::string, scenario::ParticipantParser>& participant_parsers();
 
 struct RunRequest {
   std::filesystem::path runs_dir = "runs";
-  std::string run_label;                      // appended to the scene name in the run folder's name
-  double loss_probability = 0.0;              // injected loss of received messages, every process
+  std::string run_label;          // appended to the scene name in the run folder's name
+  double loss_probability = 0.0;  // injected loss of received messages, every process
   coupler::RecordMode record_mode = coupler::RecordMode::all;  // what events.lcmlog keeps
   std::map<std::string, std::string> faults;  // participant -> "exit@W" / "hang@W" / "throw@W"
   bool show_progress = true;
@@ -27,10 +28,25 @@ struct RunRequest {
 struct RunOutcome {
   std::filesystem::path run_dir;
   coupler::RunResult result;
-  int exit_code = 0;  // 0 ok, 1 the run failed
+  int exit_code = 0;       // 0 ok, 1 the run failed, 128 + signal when interrupted
+  int interrupted_by = 0;  // SIGINT or SIGTERM when the run was interrupted, else 0
 };
 
+// The fault kinds a participant process can inject (coupler/process_main.cpp).
+const std::vector<std::string>& fault_kinds();
+
+// Checks what the command line asks of a run against the scene, before anything is made or
+// started: every --fault names a participant of the scene, a known kind and a window 1..N;
+// the injected loss is a finite fraction in [0, 0.5]. Throws std::invalid_argument naming the
+// option and its value.
+void check_run_request(const scenario::Scene& scene, const RunRequest& request);
+
+// Runs the scene. SIGINT and SIGTERM during the run stop every child, write summary.json with
+// ok: false and the reason, and give exit code 128 + signal.
 RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request);
+
+// One line for an interrupted run: what stopped it, where, and the run folder.
+std::string interruption_line(const RunOutcome& outcome);
 
 // Prints the metrics of a finished run against their references, with run times.
 void print_report(const std::filesystem::path& run_dir);

@@ -111,6 +111,7 @@ int sweep(const SweepRequest& request) {
     apply_all(document, request.overrides);
     scenario::apply_override(document, request.vary, value);
     scenes.push_back(scenario::load_scene(document, file, participant_parsers()));
+    check_run_request(scenes.back(), request.run);  // a bad --fault stops the sweep at once
   }
   using Row = SweepRow;
   std::vector<Row> rows;
@@ -121,6 +122,11 @@ int sweep(const SweepRequest& request) {
     RunRequest run = request.run;
     run.run_label = fmt::format("sweep{}", i + 1);
     const auto outcome = run_scene(scenes[i], run);
+    if (outcome.interrupted_by != 0) {
+      // Ctrl-C stops the sweep, not only the run that was going.
+      fmt::print(stderr, "{}\n", interruption_line(outcome));
+      return outcome.exit_code;
+    }
     Row row{request.values[i], outcome.result.ok, outcome.result.wall_seconds, {}, outcome.run_dir};
     std::ifstream in(outcome.run_dir / "summary.json");
     const auto summary = nlohmann::json::parse(in);

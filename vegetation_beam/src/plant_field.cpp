@@ -33,38 +33,16 @@ bool finite(const Eigen::Vector3d& v) {
 PlantField::PlantField(std::vector<PlantSpec> plants, BeamParameters parameters)
     : specs_(std::move(plants)), parameters_(std::move(parameters)) {
   const BeamParameters& p = parameters_;
-  if (!(p.fluid_density >= 0) || !(p.drag_coefficient >= 0) || !(p.added_mass_coefficient >= 0))
-    throw std::invalid_argument(
-        "vegetation_beam: fluid_density, drag_coefficient and "
-        "added_mass_coefficient must be >= 0");
-  if (!(p.safety_factor > 0) || p.max_substeps < 1 || !(p.newton_tolerance > 0) ||
-      p.max_newton_iterations < 1)
-    throw std::invalid_argument(
-        "vegetation_beam: safety_factor, max_substeps, newton_tolerance "
-        "and max_newton_iterations must be positive");
-  if (!(p.axial_damping_ratio >= 0) || !(p.bending_damping_ratio >= 0) ||
-      !(p.contact_damping_ratio >= 0))
-    throw std::invalid_argument("vegetation_beam: damping ratios must be >= 0");
+  check_beam_parameters(p);  // the declared ranges (plant_field.hpp)
   double min_node_mass = 0, min_axial_spring = 0;
   for (std::size_t index = 0; index < specs_.size(); ++index) {
     PlantSpec& spec = specs_[index];
-    const std::string name = "vegetation_beam: plant " + std::to_string(index) + ": ";
-    if (!(spec.length > 0) || spec.links < 1 || !(spec.width > 0) || !(spec.thickness > 0) ||
-        !(spec.density > 0))
-      throw std::invalid_argument(name +
-                                  "length, width, thickness, density must be > 0 and "
-                                  "links >= 1");
-    if (!spec.base.allFinite() || !(spec.direction.norm() > 0) || !spec.direction.allFinite())
-      throw std::invalid_argument(name + "base must be finite and direction non-zero");
+    check_plant(spec, static_cast<int>(index));
     spec.direction.normalize();
     const double area = spec.width * spec.thickness;
     if (spec.bending_stiffness <= 0)
       spec.bending_stiffness = spec.youngs_modulus * spec.width * std::pow(spec.thickness, 3) / 12;
     if (spec.axial_stiffness <= 0) spec.axial_stiffness = spec.youngs_modulus * area;
-    if (!(spec.bending_stiffness > 0) || !(spec.axial_stiffness > 0))
-      throw std::invalid_argument(name +
-                                  "give bending_stiffness and axial_stiffness, or "
-                                  "youngs_modulus > 0");
 
     Plant plant;
     plant.first = static_cast<int>(positions_.size());

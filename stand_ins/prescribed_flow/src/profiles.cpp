@@ -30,14 +30,11 @@ std::string profile_kind_name(ProfileKind kind) {
 }
 
 PrescribedFlow::PrescribedFlow(ProfileSettings settings) : settings_(std::move(settings)) {
-  if (settings_.bed_normal.norm() == 0.0) throw std::invalid_argument("bed_normal is zero");
+  validate_settings(settings_);  // the declared ranges and rules (profiles.hpp)
   settings_.bed_normal.normalize();
   const Eigen::Vector3d along =
       settings_.kind == ProfileKind::log_law ? settings_.direction : settings_.velocity;
   flow_direction_ = along.norm() > 0.0 ? along.normalized() : Eigen::Vector3d::UnitX();
-  if (settings_.kind == ProfileKind::log_law && settings_.roughness_length <= 0.0) {
-    throw std::invalid_argument("the log law needs a positive roughness_length");
-  }
 }
 
 double PrescribedFlow::height(const Eigen::Vector3d& point) const {

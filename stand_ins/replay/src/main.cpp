@@ -29,9 +29,15 @@ class ReplayProcess final : public coupler::Solver {
   coupler::WindowResult advance(const coupler::Window& window) override {
     const auto recorded = recording_.windows.find(window.index);
     if (recorded == recording_.windows.end() || !recorded->second.done) {
-      throw std::runtime_error(fmt::format("{}: window {} of '{}' is not in the recording",
+      // Says what the recording does hold: a run that failed early ends before the scene does.
+      const std::string held =
+          recording_.windows.empty()
+              ? std::string("it holds no window")
+              : fmt::format("it holds windows {} to {}", recording_.windows.begin()->first,
+                            recording_.windows.rbegin()->first);
+      throw std::runtime_error(fmt::format("{}: window {} of '{}' is not in the recording ({})",
                                            settings_.event_log.string(), window.index,
-                                           settings_.participant));
+                                           settings_.participant, held));
     }
     for (const auto& [field, values] : recorded->second.fields) participant_.publish(field, values);
     time_ = window.end_time();

@@ -4,6 +4,7 @@
 
 #include <sys/types.h>
 
+#include <atomic>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -16,6 +17,8 @@ struct ChildExit {
   int exit_code = 0;  // valid when !signaled
   int signal = 0;     // valid when signaled
   bool signaled = false;
+  // Not a child at all: the run was interrupted (SIGINT/SIGTERM to cosim), `signal` says how.
+  bool interrupted = false;
   std::string describe() const;
 };
 
@@ -34,6 +37,9 @@ class ProcessGroup {
   // Waits up to `seconds` for every child to exit, then kills the rest.
   std::vector<ChildExit> wait_all(double seconds);
   void terminate_all();
+  // Asks the run to stop: the next poll_exits() reports, once, an exit with `interrupted` set,
+  // so the coupler aborts the run the way it does when a child dies. Callable from any thread.
+  void interrupt(int signal);
   bool running(const std::string& name) const;
   pid_t pid_of(const std::string& name) const;
 
@@ -44,6 +50,7 @@ class ProcessGroup {
     bool exited = false;
   };
   std::vector<Child> children_;
+  std::atomic<int> interrupt_signal_{0};
 };
 
 // The folder holding this executable (solver executables are installed beside `cosim`).

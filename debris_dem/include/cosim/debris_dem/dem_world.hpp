@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cosim/debris_dem/contact_law.hpp"
+#include "cosim/debris_dem/dem_parameters.hpp"
 
 namespace cosim::dem {
 
@@ -21,93 +22,6 @@ namespace cosim::dem {
 class StabilityError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
-};
-
-// Contact spring parameters are per element material; a pair uses the mean of its two
-// materials (identical materials give exactly the table 3 values of seed 004).
-struct Material {
-  double density = 1900.0;              // kg/m^3 (seed 004 table 3: spheres 1.9, logs 0.8)
-  double normal_stiffness = 1.0e4;      // K_n, N/m (seed 004 table 3)
-  double tangential_stiffness = 4.0e3;  // K_s, N/m (seed 004 table 3)
-  // Damping ratio h of the normal and tangential dashpots (seed 004 table 3: h = 0.2). If
-  // restitution > 0 it overrides: the damping ratio that gives this head-on e under the normal
-  // law in use (damping_ratio_for_restitution in contact_law.hpp), so e is what is asked whether
-  // or not the normal force is clipped.
-  double damping_ratio = 0.2;
-  double restitution = 0.0;
-  double friction = 0.404;  // tan(phi) of the Mohr-Coulomb limit, cohesion c = 0 (table 3)
-
-  // clipped: DemParameters::clip_normal_force of the world the material is used in.
-  [[nodiscard]] double effective_damping_ratio(bool clipped) const;
-};
-
-// Drag on an element in the fluid (dem_fluid.cpp).
-enum class DragLaw : std::uint8_t {
-  // Seed 004 eq. (48): constant C_D (drag_coefficient_sphere / _cylinder) on the projected area.
-  kSeed004,
-  // Spheres: Schiller & Naumann (1933) C_D(Re), Re on the diameter. Logs: the crossflow
-  // (independence) principle, Hoerner, Fluid-Dynamic Drag (1965): the velocity component
-  // normal to the axis drives C_D(Re_n) of a circular cylinder (White's fit) on D L, the axial
-  // component the sphere C_D(Re_t) of the log's diameter on the end area pi r^2 (end-on flow
-  // past a blunt body; logs in a stream mostly see crossflow).
-  kSchillerNaumann,
-};
-
-struct DemParameters {
-  // Gravity in the world frame; slope_gravity() in scenes.hpp tilts it for a flume frame.
-  Eigen::Vector3d gravity{0.0, 0.0, -9.81};
-  double fluid_density = 1000.0;
-  double drag_coefficient_sphere = 0.49;  // seed 004 section 4.1(3), from Hashimoto et al.
-  // Seed 004 gives a log the drag of a sphere of equal projected area; here the area normal to
-  // the relative flow, 2 r L sin + pi r^2 cos, is used with this coefficient.
-  double drag_coefficient_cylinder = 0.49;
-  // The unresolved CFD-DEM force set (Zhou, Kuang, Chu & Yu, J. Fluid Mech. 661 (2010) 482-510):
-  // drag, pressure gradient and added mass, all on the submerged volume V_sub. The defaults
-  // keep seed 004's drag and buoyancy alone.
-  DragLaw drag_law = DragLaw::kSeed004;
-  double fluid_viscosity = 1.0e-3;  // mu, Pa s (water at 20 C), for the Reynolds numbers
-  // Multiply the drag by eps^(2 - chi) of Di Felice (1994), eps the local fluid volume fraction
-  // local_voidage() estimates from the moving elements within voidage_radius (m, several
-  // element diameters), updated once per window (elements move far less than the radius in
-  // one). Needs kSchillerNaumann.
-  bool voidage_correction = false;
-  double voidage_radius = 0.0;
-  // Pressure-gradient force -V_sub grad p with grad p = rho_f (g - Du/Dt): besides buoyancy
-  // -rho_f V_sub g it adds rho_f V_sub Du/Dt (the fluid's acceleration at the element).
-  bool fluid_acceleration_force = false;
-  // Added mass rho_f V_sub C (Du/Dt - dv/dt), integrated implicitly (the element's inertia
-  // becomes m + rho_f V_sub C), so light elements stay stable. C = C_a for spheres (0.5, potential
-  // flow: Lamb, Hydrodynamics, 6th ed. (1932)); for logs the tensor C_n (I - a a^T) + C_t a a^T:
-  // C_n = 1 of a circular cylinder per unit length and C_t ~ 0 along a slender body (Newman,
-  // Marine Hydrodynamics (1977) ch. 4; Brennen, A review of added mass and fluid inertial forces,
-  // NCEL CR 82.010 (1982)). The contact dashpots keep the solid mass (pair_constants).
-  bool added_mass = false;
-  double added_mass_sphere = 0.5;
-  double added_mass_cylinder_normal = 1.0;
-  double added_mass_cylinder_axial = 0.0;
-  double list_margin = 5.0e-3;  // r_dam of table 3: extra reach of candidate lists
-  // t_reset of table 3 (s): seed 004 rebuilds its lists every 1e-3 s. Infinity (the default):
-  // no fixed interval, the list is rebuilt only when two elements may have closed the margin
-  // (list_sweep_guard), the half-skin rule of a Verlet list (Allen & Tildesley, Computer
-  // Simulation of Liquids (1987) 5.3). Results do not depend on it while the guard is on (a list
-  // that holds every pair within the margin gives the same forces in the same order); in the
-  // settling benchmark it cuts rebuilds from 40 to about 10 per 4000 steps.
-  double list_reset_interval = std::numeric_limits<double>::infinity();
-  // Also rebuild the list as soon as two elements may have closed the margin (translation plus a
-  // log's end sweep); false keeps only the fixed interval of the seed.
-  bool list_sweep_guard = true;
-  // OpenMP threads for contacts, integration and lists. 1 by default: in a co-simulation the
-  // solvers already share the cores, and an oversubscribed barrier costs more than it saves.
-  int threads = 1;
-  double safety_factor = 0.1;      // dt = safety_factor * sqrt(m_min / k_max)
-  double user_dt = 0.0;            // > 0 forces this sub-step (seed 004: 1e-5 s)
-  double max_overlap_ratio = 0.5;  // overlap / smaller radius that stops the run
-  double region_size = 1.0;        // local-origin cell size, section 2.4(10) (m)
-  // true: total normal force (spring + dashpot) is clipped at zero, no tension (seed 004
-  // fig. 3a). false: the dashpot may pull while overlapping, matching the closed form of e.
-  bool clip_normal_force = true;
-  Eigen::Vector3d domain_min = Eigen::Vector3d::Constant(-1.0e6);
-  Eigen::Vector3d domain_max = Eigen::Vector3d::Constant(1.0e6);
 };
 
 enum class ElementKind : std::uint8_t { kSphere, kCylinder, kTriangle };

@@ -5,9 +5,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "cosim/scenario/parameters.hpp"
 
 namespace cosim::mps {
 
@@ -140,6 +143,84 @@ struct MpsParameters {
   PeriodicBoundary periodic;
   std::vector<PartitionSegment> partitions;
 };
+
+inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 4> kPreconditioners{
+    {{"automatic", MpsParameters::PressurePreconditioner::automatic},
+     {"amg", MpsParameters::PressurePreconditioner::amg},
+     {"jacobi", MpsParameters::PressurePreconditioner::jacobi},
+     {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky}}};
+inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
+    {{"mixed", MpsParameters::SourceTerm::mixed}, {"density", MpsParameters::SourceTerm::density}}};
+inline constexpr scenario::Choices<MpsParameters::GradientForm, 2> kGradientForms{
+    {{"minimum", MpsParameters::GradientForm::minimum},
+     {"symmetric", MpsParameters::GradientForm::symmetric}}};
+
+// The keys of `participants.fluid_mps` that are MpsParameters, each declared once
+// (cosim/scenario/parameters.hpp): the scenario parser, validate_parameters() and `cosim keys`
+// all visit this list. Gravity, the domain, periodic seams and partitions come from the scene.
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, MpsParameters>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  const Range radius{1.0, 10.0, true};  // [l0]: beyond 10 l0 the neighbour lists explode
+  v(Key("dimension").in(Range::between(2, 3)).doc("2: the world's x-z plane, 3: full 3D"),
+    p.dimension);
+  v(Key("particle_spacing").unit("m").in(Range::positive()).needed().doc("l0"), p.particle_spacing);
+  v(Key("density").unit("kg/m^3").in(Range::positive()).doc("rho"), p.density);
+  v(Key("kinematic_viscosity").unit("m^2/s").in(Range::non_negative()).doc("nu"),
+    p.kinematic_viscosity);
+  v(Key("radius_density_over_l0").in(radius).doc("number-density influence radius / l0"),
+    p.radius_density_over_l0);
+  v(Key("radius_gradient_over_l0").in(radius).doc("gradient influence radius / l0"),
+    p.radius_gradient_over_l0);
+  v(Key("radius_laplacian_over_l0").in(radius).doc("Laplacian influence radius / l0"),
+    p.radius_laplacian_over_l0);
+  v(Key("surface_threshold")
+        .in(Range::below(0.5, 1.0))
+        .doc("beta: free surface where n* < beta n0 (1 would make every particle a surface)"),
+    p.surface_threshold);
+  v(Key("collision_distance_ratio").in(Range::between(0.0, 1.5)).doc("d_cr: d_c = d_cr l0"),
+    p.collision_distance_ratio);
+  v(Key("collision_restitution").in(Range::between(-1.0, 1.0)).doc("C_c of the collision model"),
+    p.collision_restitution);
+  v(Key("courant").in(Range{0.0, 1.0, true}).doc("Courant number of the step limit"), p.courant);
+  v(Key("diffusion_number").in(Range{0.0, 0.5, true}).doc("viscous limit dt <= D l0^2 / nu"),
+    p.diffusion_number);
+  v(Key("max_dt").unit("s").in(Range::positive()).doc("upper bound of the step"), p.max_dt);
+  v(Key("pcg_tolerance").in(Range{0.0, 1e-2, true}).doc("relative residual of the pressure CG"),
+    p.pcg_tolerance);
+  v(Key("pcg_max_iterations").in(Range::between(1, 1e7)).doc("pressure CG iterations per step"),
+    p.pcg_max_iterations);
+  v(Key("pressure_preconditioner").doc("automatic: jacobi for small, amg for large systems"),
+    p.pressure_preconditioner, kPreconditioners);
+  v(Key("multigrid_radius_over_l0").in(radius).doc("radius of the amg hierarchy's Laplacian / l0"),
+    p.multigrid_radius_over_l0);
+  v(Key("compressibility").unit("1/Pa").in(Range::non_negative()).doc("artificial compressibility"),
+    p.compressibility);
+  v(Key("source_term").doc("pressure Poisson source: density (seed 001) or mixed"), p.source_term,
+    kSourceTerms);
+  v(Key("pressure_relaxation").in(Range{0.0, 1.0, true}).doc("gamma of the source term"),
+    p.pressure_relaxation);
+  v(Key("runaway_speed").unit("m/s").in(Range::positive()).doc("faster particles stop the run"),
+    p.runaway_speed);
+  v(Key("pressure_gradient").doc("minimum (Koshizuka-Oka) or symmetric (momentum-conserving)"),
+    p.gradient_form, kGradientForms);
+}
+
+// Rough memory per particle [bytes]: about 25 per-particle vectors and scalars of FluidSystem
+// (~600 B), and per neighbour within the largest radius about 40 B (the pair lists of the
+// operators, the Poisson matrix row, the preconditioner's copy): 2D at 4 l0 ~2.6 kB, 3D ~11 kB.
+inline double estimated_bytes_per_particle(const MpsParameters& p) {
+  const double r =
+      std::max({p.radius_density_over_l0, p.radius_gradient_over_l0, p.radius_laplacian_over_l0});
+  const double neighbours = p.dimension == 3 ? 4.18879 * r * r * r : 3.14159 * r * r;
+  return 600.0 + 40.0 * neighbours;
+}
+
+// The library's check of MpsParameters: the declared ranges, then the periodic seam (set by the
+// scene builders). Throws scenario::ParameterError ("MpsParameters: key 'k': problem").
+void validate_parameters(const MpsParameters& p);
 
 // The largest reach of any operator [m]: influence radii and the collision distance.
 inline double largest_influence_radius(const MpsParameters& p) {

@@ -15,21 +15,13 @@
 #include <string>
 #include <vector>
 
+#include "cosim/scenario/parameters.hpp"  // Range
+
 namespace cosim::scenario {
 
 class ScenarioError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
-};
-
-struct Range {
-  double min = -std::numeric_limits<double>::infinity();
-  double max = std::numeric_limits<double>::infinity();
-  bool min_exclusive = false;
-  static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true}; }
-  static Range non_negative() { return {0.0}; }
-  static Range between(double low, double high) { return {low, high}; }
-  static Range fraction() { return {0.0, 1.0}; }
 };
 
 class Section {

@@ -6,11 +6,14 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
+#include <concepts>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "cosim/scenario/parameters.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
 
 namespace cosim::vegetation {
@@ -45,6 +48,113 @@ struct BeamParameters {
   double newton_tolerance = 1e-10;     // on the largest position correction, in link lengths
   int max_newton_iterations = 20;      // per attempt; a sub-step makes at most two (see advance)
 };
+
+// The keys of one `plants` entry (count and spacing aside), declared once for the parser, the
+// library's check (check_plant) and `cosim keys` (cosim/scenario/parameters.hpp).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PlantSpec>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("base").unit("m").needed().doc("clamped base, world frame"), p.base);
+  v(Key("direction").doc("base to tip, unstressed (normalised)"), p.direction);
+  v.rule("direction", p.direction.norm() > 0.0, "must not be zero");
+  v(Key("length").unit("m").in(Range::positive()).needed().doc("plant length"), p.length);
+  v(Key("links").in(Range::between(1, 10000)).doc("nodes = links + 1, node 0 clamped"), p.links);
+  v(Key("width").unit("m").in(Range::positive()).needed().doc("frontal width b (drag, contact)"),
+    p.width);
+  v(Key("thickness").unit("m").in(Range::positive()).needed().doc("thickness"), p.thickness);
+  v(Key("density").unit("kg/m^3").in(Range::positive()).needed().doc("plant material sigma"),
+    p.density);
+  v(Key("bending_stiffness")
+        .unit("N m^2")
+        .in(Range::non_negative())
+        .omitted_means("youngs_modulus width thickness^3 / 12")
+        .doc("EI"),
+    p.bending_stiffness);
+  v(Key("axial_stiffness")
+        .unit("N")
+        .in(Range::non_negative())
+        .omitted_means("youngs_modulus width thickness")
+        .doc("EA"),
+    p.axial_stiffness);
+  const bool derived = !(p.bending_stiffness > 0) || !(p.axial_stiffness > 0);
+  v(Key("youngs_modulus")
+        .unit("Pa")
+        .in(Range::positive())
+        .needed()
+        .only_with(derived, "bending_stiffness or axial_stiffness not given")
+        .doc("E, for the stiffnesses not given"),
+    p.youngs_modulus);
+  // E b t^3 / 12 of a very thin plant can underflow to 0 (t = 1e-110 m: t^3 = 0).
+  const double ei = p.bending_stiffness > 0
+                        ? p.bending_stiffness
+                        : p.youngs_modulus * p.width * std::pow(p.thickness, 3) / 12;
+  const double ea =
+      p.axial_stiffness > 0 ? p.axial_stiffness : p.youngs_modulus * p.width * p.thickness;
+  v.rule("youngs_modulus", ei > 0 && ea > 0 && std::isfinite(ei) && std::isfinite(ea),
+         "the stiffness from youngs_modulus, width and thickness is not a positive finite number: "
+         "give bending_stiffness and axial_stiffness");
+}
+
+// A plant as the scenario reads it when keys are absent: in the world frame, standing along +z.
+inline PlantSpec scenario_plant_defaults() {
+  PlantSpec spec;
+  spec.direction = Eigen::Vector3d::UnitZ();
+  return spec;
+}
+
+// The keys of `participants.vegetation_beam` that are BeamParameters (gravity is the scene's).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, BeamParameters>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("fluid_density").unit("kg/m^3").in(Range::non_negative()).doc("rho (0: vacuum)"),
+    p.fluid_density);
+  v(Key("drag_coefficient").in(Range::non_negative()).doc("C_D, flow normal to the plant"),
+    p.drag_coefficient);
+  v(Key("added_mass_coefficient").in(Range::non_negative()).doc("C_M"), p.added_mass_coefficient);
+  v(Key("axial_damping_ratio").in(Range::between(0.0, 10.0)).doc("fraction of critical"),
+    p.axial_damping_ratio);
+  v(Key("bending_damping_ratio").in(Range::between(0.0, 10.0)).doc("fraction of critical"),
+    p.bending_damping_ratio);
+  v(Key("contact").doc("plant-to-plant contact"), p.contact);
+  v(Key("contact_stiffness").unit("N/m").in(Range::non_negative()).doc("0: the smallest EA / l0"),
+    p.contact_stiffness);
+  v(Key("rigid").doc("nodes never move; drag is still computed"), p.rigid);
+  // Newmark average acceleration is unconditionally stable: factors above 1 trade axial-strain
+  // accuracy for speed (seed 000: 10 to 100 beam steps per fluid step suffice).
+  v(Key("safety_factor").in(Range{0.0, 1000.0, true}).doc("multiplies the spring-mass step"),
+    p.safety_factor);
+  v(Key("max_substeps").in(Range::between(1, 100000000)).doc("per window; more is an error"),
+    p.max_substeps);
+  // Looser than 1e-3 of a link per sub-step is no longer small against the shapes to resolve.
+  v(Key("newton_tolerance").in(Range{0.0, 1e-3, true}).doc("largest correction / link length"),
+    p.newton_tolerance);
+  v(Key("max_newton_iterations").in(Range::between(1, 1000)).doc("per attempt of a sub-step"),
+    p.max_newton_iterations);
+}
+
+// Library checks (the declared ranges and rules); throw scenario::ParameterError naming the key.
+inline void check_plant(const PlantSpec& spec, int index) {
+  scenario::check_parameters(spec, "vegetation_beam: plant " + std::to_string(index));
+}
+inline void check_beam_parameters(const BeamParameters& p) {
+  scenario::check_parameters(p, "vegetation_beam");
+  if (!(p.contact_damping_ratio >= 0))  // not a scenario key
+    throw scenario::ParameterError("vegetation_beam", "contact_damping_ratio", "must be >= 0");
+}
+
+// Rough memory of a plant field [bytes]: the per-node arrays of PlantField (about 30
+// three-vectors and scalars, two 3x3 contact blocks, the banded Jacobian) measured 1.04 kB per
+// node (RSS after a window, 2000 plants x 100 links); the process adds its link buffers and
+// output frames (about 20 more three-vectors per node).
+inline constexpr double kBytesPerPlantNode = 1600.0;
+inline constexpr double kBytesPerPlant = 600.0;  // specs, per-plant constants, pairs
+inline double estimated_memory_bytes(double plants, double nodes) {
+  return plants * kBytesPerPlant + nodes * kBytesPerPlantNode;
+}
 
 struct WindowReport {
   int substeps = 0;

@@ -4,10 +4,13 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <concepts>
 #include <limits>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "cosim/scenario/parameters.hpp"
 
 namespace cosim::prescribed_flow {
 
@@ -38,6 +41,81 @@ struct ProfileSettings {
   double end_time = std::numeric_limits<double>::infinity();
   double ramp_time = 0.0;
 };
+
+inline constexpr scenario::Choices<ProfileKind, 4> kProfiles{
+    {{"uniform", ProfileKind::uniform},
+     {"log_law", ProfileKind::log_law},
+     {"seed004_flowing", ProfileKind::seed004_flowing},
+     {"seed004_capture", ProfileKind::seed004_capture}}};
+
+// The keys of `participants.prescribed_flow`, declared once for the parser, the library's check
+// (validate_settings) and `cosim keys` (cosim/scenario/parameters.hpp).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ProfileSettings>
+void visit_parameters(P& s, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("profile").doc("the analytic flow"), s.kind, kProfiles);
+  const bool log_law = s.kind == ProfileKind::log_law;
+  const bool capture = s.kind == ProfileKind::seed004_capture;
+  const bool seed = capture || s.kind == ProfileKind::seed004_flowing;
+  v(Key("bed_point").unit("m").doc("a point on the bed"), s.bed_point);
+  v(Key("bed_normal").doc("the bed's upward normal"), s.bed_normal);
+  v.rule("bed_normal", s.bed_normal.norm() > 0.0, "must not be zero");
+  const Key depth = Key("depth")
+                        .unit("m")
+                        .in(Range::positive())
+                        .doc("flow depth h above the bed; required by the seed004 profiles");
+  v(seed ? depth.needed() : depth.omitted_means("inf: no free surface"), s.depth);
+  const char* law = "profile: log_law";
+  v(Key("direction").only_with(log_law, law).doc("flow direction of the log law"), s.direction);
+  v.rule("direction", !log_law || s.direction.norm() > 0.0, "must not be zero");
+  v(Key("shear_velocity")
+        .unit("m/s")
+        .in(Range::non_negative())
+        .needed()
+        .only_with(log_law, law)
+        .doc("u*"),
+    s.shear_velocity);
+  v(Key("roughness_length")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .only_with(log_law, law)
+        .doc("z0"),
+    s.roughness_length);
+  v(Key("velocity")
+        .unit("m/s")
+        .needed()
+        .only_with(!log_law, "profile: uniform, seed004_flowing, seed004_capture")
+        .doc("uniform velocity, or seed 004's surface velocity U"),
+    s.velocity);
+  const char* ponded = "profile: seed004_capture";
+  v(Key("dam_point").unit("m").needed().only_with(capture, ponded).doc("a point on the dam plane"),
+    s.dam_point);
+  v(Key("capture_length")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .only_with(capture, ponded)
+        .doc("reach of the ponded profile upstream of the dam"),
+    s.capture_length);
+  v(Key("start_time").unit("s").in(Range::non_negative()).doc("water flows from"), s.start_time);
+  v(Key("end_time")
+        .unit("s")
+        .in(Range::non_negative())
+        .omitted_means("inf: never stops")
+        .doc("water flows until"),
+    s.end_time);
+  v.rule("end_time", s.end_time >= s.start_time, "must not be before start_time");
+  v(Key("ramp_time").unit("s").in(Range::non_negative()).doc("linear ramp of the speed"),
+    s.ramp_time);
+}
+
+// The library's check: the declared ranges and rules; throws scenario::ParameterError.
+inline void validate_settings(const ProfileSettings& settings) {
+  scenario::check_parameters(settings, "prescribed_flow");
+}
 
 inline constexpr double kVonKarman = 0.41;
 
