@@ -2,6 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
+#include "cosim/scenario/parameter_reader.hpp"
+
 namespace cosim::mps {
 
 using scenario::Range;
@@ -10,53 +14,7 @@ namespace {
 
 MpsParameters parse_parameters(scenario::Section& section) {
   MpsParameters p;
-  p.dimension = section.integer("dimension", p.dimension, Range::between(2, 3));
-  p.particle_spacing = section.number("particle_spacing", Range::positive());
-  p.density = section.number("density", p.density, Range::positive());
-  p.kinematic_viscosity =
-      section.number("kinematic_viscosity", p.kinematic_viscosity, Range::non_negative());
-  p.radius_density_over_l0 =
-      section.number("radius_density_over_l0", p.radius_density_over_l0, Range::between(1.0, 10.0));
-  p.radius_gradient_over_l0 = section.number("radius_gradient_over_l0", p.radius_gradient_over_l0,
-                                             Range::between(1.0, 10.0));
-  p.radius_laplacian_over_l0 = section.number(
-      "radius_laplacian_over_l0", p.radius_laplacian_over_l0, Range::between(1.0, 10.0));
-  p.surface_threshold =
-      section.number("surface_threshold", p.surface_threshold, Range::between(0.5, 1.0));
-  p.collision_distance_ratio = section.number("collision_distance_ratio",
-                                              p.collision_distance_ratio, Range::between(0.0, 1.5));
-  p.collision_restitution =
-      section.number("collision_restitution", p.collision_restitution, Range::between(-1.0, 1.0));
-  p.courant = section.number("courant", p.courant, Range{0.0, 1.0, true});
-  p.diffusion_number =
-      section.number("diffusion_number", p.diffusion_number, Range{0.0, 0.5, true});
-  p.max_dt = section.number("max_dt", p.max_dt, Range::positive());
-  p.pcg_tolerance = section.number("pcg_tolerance", p.pcg_tolerance, Range{0.0, 1e-2, true});
-  p.pcg_max_iterations =
-      section.integer("pcg_max_iterations", p.pcg_max_iterations, Range::between(1, 1e7));
-  using Preconditioner = MpsParameters::PressurePreconditioner;
-  const std::string preconditioner =
-      section.text("pressure_preconditioner", "automatic",
-                   {"automatic", "amg", "jacobi", "incomplete_cholesky"});
-  p.pressure_preconditioner = preconditioner == "jacobi" ? Preconditioner::jacobi
-                              : preconditioner == "incomplete_cholesky"
-                                  ? Preconditioner::incomplete_cholesky
-                              : preconditioner == "amg" ? Preconditioner::amg
-                                                        : Preconditioner::automatic;
-  p.multigrid_radius_over_l0 = section.number("multigrid_radius_over_l0",
-                                              p.multigrid_radius_over_l0, Range{1.0, 10.0, true});
-  p.compressibility = section.number("compressibility", p.compressibility, Range::non_negative());
-  const std::string default_source =
-      p.source_term == MpsParameters::SourceTerm::mixed ? "mixed" : "density";
-  const std::string source = section.text("source_term", default_source, {"mixed", "density"});
-  p.source_term =
-      source == "mixed" ? MpsParameters::SourceTerm::mixed : MpsParameters::SourceTerm::density;
-  p.pressure_relaxation =
-      section.number("pressure_relaxation", p.pressure_relaxation, Range::between(0.0, 1.0));
-  p.runaway_speed = section.number("runaway_speed", p.runaway_speed, Range::positive());
-  const std::string form = section.text("pressure_gradient", "minimum", {"minimum", "symmetric"});
-  p.gradient_form = form == "symmetric" ? MpsParameters::GradientForm::symmetric
-                                        : MpsParameters::GradientForm::minimum;
+  scenario::read_parameters(section, p);  // the keys declared in parameters.hpp
   return p;
 }
 
@@ -84,10 +42,26 @@ OpenBoundarySettings parse_inflow(scenario::Section inflow) {
   return settings;
 }
 
-SceneSettings parse_scene(scenario::Section scene, double gravity) {
+SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension) {
   SceneSettings s;
   s.kind = scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel",
                                  "open_channel", "pool_fishway", "periodic_pool"});
+  // 3D: the tanks of scenes_3d.cpp, `tank_width` across (y); the other kinds are 2D only.
+  if (dimension == 3) {
+    if (s.kind != "dam_break" && s.kind != "still_water_tank") {
+      scene.fail("kind", fmt::format("'{}' has no 3D scene (dimension: 3 builds dam_break or "
+                                     "still_water_tank)",
+                                     s.kind));
+    }
+    s.tank_width = scene.number("tank_width", Range::positive());
+    // Solid boxes in the tank (world [x, y, z] corners [m]), e.g. SPHERIC test 2's box.
+    for (auto& box :
+         scene.has("obstacles") ? scene.list("obstacles") : std::vector<scenario::Section>{}) {
+      const Eigen::Vector3d low = box.vector3("min"), high = box.vector3("max");
+      if ((high.array() <= low.array()).any()) box.fail("max", "must exceed min in x, y and z");
+      s.obstacles.emplace_back(low, high);
+    }
+  }
   if (s.kind == "dam_break") {
     s.column_width = scene.number("column_width", Range::positive());
     s.column_height = scene.number("column_height", Range::positive());
@@ -144,6 +118,25 @@ SceneSettings parse_scene(scenario::Section scene, double gravity) {
   return s;
 }
 
+// Particles of a scene, roughly: its water plus the wall and dummy layers around the tank (for
+// the memory estimate; the builders make the exact set).
+double estimated_particles(const SceneSettings& s, const MpsParameters& p) {
+  const FishwayGeometry& g = s.fishway;
+  const double fishway_length = g.pools * g.pool_length + g.outlet_length;
+  double length = std::max({s.tank_length, s.width, s.length, fishway_length});
+  double height = std::max({s.tank_height, s.depth, s.block_height, g.block_height});
+  double water = s.column_width * s.column_height + s.width * s.depth + s.length * s.depth;
+  if (s.kind == "pool_fishway" || s.kind == "periodic_pool") water = fishway_length * height;
+  const double l0 = p.particle_spacing;
+  const double layers = (s.wall_layers + s.dummy_layers) * l0;
+  if (p.dimension == 3) {
+    const double width = std::max(s.tank_width, l0);
+    return (water * width + 2.0 * (length * height + length * width + height * width) * layers) /
+           (l0 * l0 * l0);
+  }
+  return (water + (2.0 * height + length) * layers) / (l0 * l0);
+}
+
 }  // namespace
 
 FluidConfig parse_config(scenario::Section& section, const scenario::Scene& world_scene) {
@@ -167,8 +160,14 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
     config.restart = RestartSettings{restart.existing_file("file"), restart.integer("frame", -1)};
   }
   // The initial scene is still described on restart: it documents the run and sets the tank.
-  config.scene = parse_scene(section.child("scene"), config.parameters.gravity.norm());
+  config.scene = parse_scene(section.child("scene"), config.parameters.gravity.norm(),
+                             config.parameters.dimension);
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
+  const double particles = estimated_particles(config.scene, config.parameters);
+  scenario::MemoryBudget("fluid_mps")
+      .add(section, "particle_spacing", particles * estimated_bytes_per_particle(config.parameters),
+           fmt::format("{:.3g} particles x {:.3g} B", particles,
+                       estimated_bytes_per_particle(config.parameters)));
   for (auto& partition :
        section.has("partitions") ? section.list("partitions") : std::vector<scenario::Section>{}) {
     // World [x, z] of the partition's ends (the fluid's plane).
@@ -197,6 +196,10 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
   }
   const double spacing = config.parameters.particle_spacing;
   config.sample_radius = section.number("sample_radius", 2.0 * spacing, Range::positive());
+  // > 0: the solids' submerged volumes spread over this radius (FluidSystem::set_solid_volumes),
+  // at least the largest element's size so the solid fraction stays below its cap; 0: none.
+  config.displacement_radius = section.number("displacement_radius", 0.0, Range::non_negative());
+  config.displacement_ramp = section.number("displacement_ramp", 0.1, Range::non_negative());
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());
   if (section.has("reference")) {

@@ -22,6 +22,10 @@ struct SceneSettings {
   double column_width = 0, column_height = 0;  // dam_break
   double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
   double tank_length = 0, tank_height = 0;
+  // dimension 3 (dam_break, still_water_tank): the tank's width across (y) and solid boxes in
+  // the tank [m]
+  double tank_width = 0;
+  std::vector<Eigen::AlignedBox3d> obstacles;
   double length = 0;                 // channels (the bed slope is the world's gravity tilt)
   double driving_pressure_drop = 0;  // periodic_channel: p(x_min) - p(x_max) [Pa]
   double block_height = 0;           // open_channel: height of the soluble moving wall block
@@ -62,6 +66,11 @@ struct FluidConfig {
   SceneSettings scene;
   std::optional<RestartSettings> restart;
   double sample_radius = 0;     // ensemble-average radius around solid nodes (seed 000 r_ev)
+  // > 0: the fluid leaves the solids' submerged volumes to them, spread over this radius [m],
+  // grown from zero over the first displacement_ramp [s] (water present from the start would
+  // otherwise be blasted away in one step).
+  double displacement_radius = 0;
+  double displacement_ramp = 0;
   double span = 1;              // 2D: the width along y the slice stands for [m]
   coupler::SolverFrame frame;   // world <-> the library's coordinates
   double output_interval = 0;

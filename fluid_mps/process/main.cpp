@@ -21,6 +21,21 @@ namespace {
 using namespace cosim;
 
 mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings& scene) {
+  if (parameters.dimension == 3) {  // the config admits only these two kinds in 3D
+    // dam_break: the column over the whole width; still_water_tank: `width` long (x), filled to
+    // `depth`. Water cells inside an obstacle are solid (scenes.hpp, tank_3d).
+    const bool dam = scene.kind == "dam_break";
+    const mps::Tank3d tank{dam ? scene.tank_length : scene.width,
+                           scene.tank_width,
+                           scene.tank_height,
+                           scene.obstacles,
+                           scene.wall_layers,
+                           scene.dummy_layers};
+    const Eigen::Vector3d water =
+        dam ? Eigen::Vector3d(scene.column_width, scene.tank_width, scene.column_height)
+            : Eigen::Vector3d(scene.width, scene.tank_width, scene.depth);
+    return mps::tank_3d(parameters, tank, {Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), water)});
+  }
   if (scene.kind == "dam_break") {
     return mps::dam_break(parameters, scene.column_width, scene.column_height, scene.tank_length,
                           scene.tank_height, scene.wall_layers, scene.dummy_layers);
@@ -112,7 +127,10 @@ class FluidProcess final : public coupler::Solver {
                        config_.reference->average_from,
                        periodic ? scene.fill_discharge : scene.inflow.discharge, periodic);
     } else if (config_.reference) {
-      reference_.emplace(*config_.reference, -config_.parameters.gravity.y());
+      // Gravity along the library's vertical: y of the 2D plane, z in 3D.
+      const int dimension = config_.parameters.dimension;
+      reference_.emplace(*config_.reference, -config_.parameters.gravity[dimension - 1], dimension,
+                         0.5 * scene.tank_width);
     }
     if (config_.observation) {
       observation_.emplace(config_.observation->points, config_.observation->radius);
@@ -135,7 +153,7 @@ class FluidProcess final : public coupler::Solver {
   }
 
   coupler::WindowResult advance(const coupler::Window& window) override {
-    const auto solids = link_.receive_solids(window);
+    const auto solids = link_.receive_solids(window, config_.displacement_radius > 0.0);
     int window_steps = 0;
     if (window.dt > 0.0) window_steps = step_window(window, solids);
     if (observation_) observation_->record(*system_);
@@ -170,6 +188,10 @@ class FluidProcess final : public coupler::Solver {
       info["final_measured_level"] = open_boundaries_->measured_level();
     }
     info["particles"] = system_->particle_count();
+    if (config_.displacement_radius > 0.0) {
+      // Above kMaximumSolidFraction the fluid was given back some of the solids' volume.
+      info["largest_solid_fraction"] = largest_solid_fraction_;
+    }
     info["steps"] = steps_;
     info["mean_pcg_iterations"] = steps_ > 0 ? double(pcg_iterations_) / steps_ : 0.0;
     info["most_pcg_iterations"] = most_pcg_iterations_;
@@ -213,17 +235,33 @@ class FluidProcess final : public coupler::Solver {
     return system;
   }
 
+  // All solids' submerged volumes in one set (their points in solid order).
+  void set_displaced_volumes(const std::vector<coupler::SolidForcing>& solids) {
+    const double ramp = config_.displacement_ramp;
+    const double share = ramp > 0.0 ? std::min(1.0, system_->time() / ramp) : 1.0;
+    std::vector<Eigen::Vector3d> points;
+    std::vector<double> volumes;
+    for (const auto& solid : solids) {
+      points.insert(points.end(), solid.positions.begin(), solid.positions.end());
+      for (const double v : solid.volumes) volumes.push_back(share * v);
+    }
+    system_->set_solid_volumes(std::move(points), std::move(volumes), config_.displacement_radius);
+  }
+
   // The solids' reaction (minus their drag, in the fluid's plane, per span width, rescaled to
   // this window by the link) acts in every fluid step of the window.
   int step_window(const coupler::Window& window, const std::vector<coupler::SolidForcing>& solids) {
     std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> forces;
     for (const auto& solid : solids) forces.emplace_back(solid.positions, solid.reaction);
     const auto delivery = system_->set_point_forces(forces, config_.sample_radius);
+    if (config_.displacement_radius > 0.0) set_displaced_volumes(solids);
     undelivered_ += delivery.undelivered_force * window.dt;
     const int pieces =
         std::max(1, static_cast<int>(std::ceil(window.dt / system_->stable_dt() - 1e-9)));
     for (int piece = 0; piece < pieces; ++piece) {
       const auto step = system_->step(window.dt / pieces);
+      largest_solid_fraction_ =
+          std::max(largest_solid_fraction_, system_->largest_solid_fraction());
       impulses_.solids += step.external_impulse;
       budget_sources_ += step.body_impulse + step.wall_viscous_force * (window.dt / pieces) +
                          step.collision_impulse + step.pressure_impulse + step.external_impulse;
@@ -252,7 +290,8 @@ class FluidProcess final : public coupler::Solver {
   int64_t steps_ = 0, pcg_iterations_ = 0;
   int most_pcg_iterations_ = 0;
   Eigen::Vector3d undelivered_ = Eigen::Vector3d::Zero();
-  mps::FluidImpulses impulses_;  // momentum the fluid received, by source
+  double largest_solid_fraction_ = 0.0;  // over the run (displacement_radius > 0)
+  mps::FluidImpulses impulses_;          // momentum the fluid received, by source
   Eigen::Vector3d initial_momentum_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d budget_sources_ = Eigen::Vector3d::Zero();
   double budget_scale_ = 0.0;

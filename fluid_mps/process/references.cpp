@@ -32,8 +32,9 @@ bool interpolate(const std::vector<double>& x, const std::vector<double>& y, dou
 
 }  // namespace
 
-ReferenceTracker::ReferenceTracker(const ReferenceSettings& settings, double gravity)
-    : settings_(settings), gravity_(gravity) {
+ReferenceTracker::ReferenceTracker(const ReferenceSettings& settings, double gravity, int dimension,
+                                   double probe_across)
+    : settings_(settings), gravity_(gravity), dimension_(dimension), probe_across_(probe_across) {
   if (settings_.kind == "martin_moyce") {
     std::ifstream in(settings_.file);
     std::string line;
@@ -100,8 +101,10 @@ void ReferenceTracker::observe(const FluidSystem& system, const FluidImpulses& i
   if (system.time() < settings_.average_from) return;
   const double radius = settings_.probe_radius;
   for (std::size_t i = 0; i < settings_.probe_depths.size(); ++i) {
-    const Eigen::Vector3d probe(settings_.probe_x,
-                                settings_.still_depth - settings_.probe_depths[i], 0.0);
+    const double height = settings_.still_depth - settings_.probe_depths[i];
+    const Eigen::Vector3d probe = dimension_ == 3
+                                      ? Eigen::Vector3d(settings_.probe_x, probe_across_, height)
+                                      : Eigen::Vector3d(settings_.probe_x, height, 0.0);
     pressure_sums_[i] += mean_pressure_at(system, probe, radius);
   }
   ++pressure_samples_;

@@ -31,7 +31,10 @@ struct ReferenceSeries {
 // Samples the run at the end of every window and reports against the reference at the end.
 class ReferenceTracker {
  public:
-  ReferenceTracker(const ReferenceSettings& settings, double gravity);
+  // gravity: its magnitude along the vertical [m/s^2]. dimension 3: the vertical is z and the
+  // hydrostatic probes lie at y = probe_across (mid-width of the tank); 2D: the plane's y.
+  ReferenceTracker(const ReferenceSettings& settings, double gravity, int dimension = 2,
+                   double probe_across = 0.0);
   void observe(const FluidSystem& system, const FluidImpulses& impulses,
                const ObservationPoints* observation);
   void report(coupler::MetricsReport& report) const;
@@ -44,6 +47,8 @@ class ReferenceTracker {
   };
   ReferenceSettings settings_;
   double gravity_;
+  int dimension_ = 2;
+  double probe_across_ = 0;
   Curve front_reference_, height_reference_;
   std::vector<double> times_, fronts_, heights_;
   std::vector<double> pressure_sums_;

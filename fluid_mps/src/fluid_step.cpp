@@ -234,6 +234,7 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   // After the collision stage only the particles it moved need new distances.
   update_neighbours(position_star_, report, collisions_refreshed_ ? &collided_ : nullptr);
   collisions_refreshed_ = false;
+  update_solid_fractions(position_star_);
   const NeighbourList& list = neighbours_;
   fill(number_densities_, n, 0.0);
   fill(divergence_, n, 0.0);
@@ -256,7 +257,8 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   unknown_particle_.clear();
   for (int i = 0; i < n; ++i) {
     if (kinds_[i] == ParticleKind::dummy || is_inactive(kinds_[i])) continue;
-    if (number_densities_[i] < p.surface_threshold * c.n0_n) {
+    // Where solids take a share phi of the space, the fluid's full density is (1 - phi) n0.
+    if (number_densities_[i] < p.surface_threshold * c.n0_n * (1.0 - solid_fraction_[i])) {
       ++report.surface_particles;
       continue;
     }
@@ -282,9 +284,13 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
 #pragma omp parallel for schedule(static) if (m >= 4096)
   for (int row = 0; row < m; ++row) {
     const int i = unknown_particle_[row];
+    // Target (1 - phi_i) n0 (set_solid_volumes); the row keeps the n0 scaling so the matrix
+    // stays symmetric. The divergence part has no d phi / dt term: with solids, the density
+    // error is what pushes the displaced water away.
+    const double target = c.n0_n * (1.0 - solid_fraction_[i]);
     rhs_[row] = p.source_term == MpsParameters::SourceTerm::density
-                    ? scale * p.pressure_relaxation * (number_densities_[i] - c.n0_n) / c.n0_n
-                    : scale * (p.pressure_relaxation * (density_now_[i] - c.n0_n) / c.n0_n -
+                    ? scale * p.pressure_relaxation * (number_densities_[i] - target) / c.n0_n
+                    : scale * (p.pressure_relaxation * (density_now_[i] - target) / c.n0_n -
                                c.dt * divergence_[i]);
     solution_[row] = pressures_[i];  // warm start from the previous step
   }
@@ -406,9 +412,11 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
       gradient += term;
       if (!is_fluid(kinds_[j])) wall_gradient += term;
     }
-    // Applied below: the loop still reads the partners' r*.
-    pressure_change_[i] = -factor * gradient;
-    wall_pressure_change_[i] = -factor * wall_gradient;
+    // Applied below: the loop still reads the partners' r*. Among solids the neighbourhood is
+    // (1 - phi) full, so the sum is normalised by (1 - phi) n0.
+    const double local_factor = factor / (1.0 - solid_fraction_[i]);
+    pressure_change_[i] = -local_factor * gradient;
+    wall_pressure_change_[i] = -local_factor * wall_gradient;
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {

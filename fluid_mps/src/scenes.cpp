@@ -37,7 +37,15 @@ void set_domain(MpsParameters& p, double tank_length, double tank_height, int la
 }
 
 void require_2d(const MpsParameters& p) {
-  if (p.dimension != 2) throw std::invalid_argument("scene builders are 2D (dimension = 2)");
+  if (p.dimension != 2)
+    throw std::invalid_argument(
+        "dam_break and still_water_tank are 2D (dimension = 2); in 3D use dam_break_3d, "
+        "still_water_tank_3d or tank_3d");
+}
+
+// The library's vertical coordinate: y of the 2D plane (the world's z), z in 3D.
+int vertical_axis(const FluidSystem& system) {
+  return system.parameters().dimension == 3 ? 2 : 1;
 }
 
 }  // namespace
@@ -56,38 +64,6 @@ ParticleSet dam_break(MpsParameters& parameters, double column_width, double col
   return set;
 }
 
-ParticleSet dam_break_3d(MpsParameters& parameters, double column_length, double column_height,
-                         double tank_length, double tank_width, double tank_height, int wall_layers,
-                         int dummy_layers) {
-  if (parameters.dimension != 3) {
-    throw std::invalid_argument("dam_break_3d needs dimension = 3");
-  }
-  const double l0 = parameters.particle_spacing;
-  const int layers = wall_layers + dummy_layers;
-  const int nx = cells(tank_length, l0), ny = cells(tank_width, l0), nz = cells(tank_height, l0);
-  const int fx = cells(column_length, l0), fz = cells(column_height, l0);
-  ParticleSet set;
-  for (int iz = -layers; iz < nz; ++iz)
-    for (int iy = -layers; iy < ny + layers; ++iy)
-      for (int ix = -layers; ix < nx + layers; ++ix) {
-        // Depth into the floor or the nearest of the four side walls; 0 inside the tank.
-        const int depth = std::max({-iz, -ix, ix - nx + 1, -iy, iy - ny + 1, 0});
-        const Eigen::Vector3d x((ix + 0.5) * l0, (iy + 0.5) * l0, (iz + 0.5) * l0);
-        if (depth == 0) {
-          if (ix < fx && iz < fz) set.add(x, ParticleKind::fluid);
-          continue;
-        }
-        set.add(x, depth <= wall_layers ? ParticleKind::wall : ParticleKind::dummy);
-      }
-  if (parameters.domain.isEmpty()) {
-    const double margin = (layers + 2) * l0;
-    parameters.domain = Eigen::AlignedBox3d(
-        Eigen::Vector3d(-margin, -margin, -margin),
-        Eigen::Vector3d(tank_length + margin, tank_width + margin, 2.0 * tank_height));
-  }
-  return set;
-}
-
 ParticleSet still_water_tank(MpsParameters& parameters, double width, double depth,
                              double tank_height, int wall_layers, int dummy_layers) {
   return dam_break(parameters, width, depth, width, tank_height, wall_layers, dummy_layers);
@@ -96,11 +72,12 @@ ParticleSet still_water_tank(MpsParameters& parameters, double width, double dep
 double surge_front_position(const FluidSystem& system, double bed_height, double band) {
   const double l0 = system.parameters().particle_spacing;
   if (band < 0.0) band = 2.0 * l0;
+  const int up = vertical_axis(system);
   double front = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < system.particle_count(); ++i) {
     if (system.kinds()[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = system.positions()[i];
-    if (x.y() - bed_height <= band) front = std::max(front, x.x());
+    if (x[up] - bed_height <= band) front = std::max(front, x.x());
   }
   return front + 0.5 * l0;
 }
@@ -108,11 +85,12 @@ double surge_front_position(const FluidSystem& system, double bed_height, double
 double residual_column_height(const FluidSystem& system, double wall_x, double band) {
   const double l0 = system.parameters().particle_spacing;
   if (band < 0.0) band = 2.0 * l0;
+  const int up = vertical_axis(system);
   double height = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < system.particle_count(); ++i) {
     if (system.kinds()[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = system.positions()[i];
-    if (x.x() - wall_x <= band) height = std::max(height, x.y());
+    if (x.x() - wall_x <= band) height = std::max(height, x[up]);
   }
   return height + 0.5 * l0;
 }

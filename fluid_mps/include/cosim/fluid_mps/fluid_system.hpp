@@ -122,6 +122,22 @@ class FluidSystem {
           point_forces,
       double radius);
 
+  // Volumes the solids occupy in the fluid [m^3 in 3D, m^2 per span in 2D] at points, kept until
+  // set again (empty: none). The fluid then leaves them to the solids, as in the locally
+  // averaged equations of unresolved CFD-DEM (Anderson & Jackson 1967; for MPS, Sakai et al.,
+  // Chem. Eng. J. 200-202 (2012) 663-672): each volume is spread over `radius` with a normalised
+  // kernel into a solid fraction phi_i at the fluid particles, whose incompressible number
+  // density becomes (1 - phi_i) n0. Solids moving through the water thus displace it (a level
+  // that rises, waves radiated by a heaving body, a return flow around sinking ones). Throws if
+  // the radius is not positive or a volume is negative.
+  void set_solid_volumes(std::vector<Eigen::Vector3d> points, std::vector<double> volumes,
+                         double radius);
+  // phi_i of the last step (0 for every particle without solid volumes; all sizes n).
+  const std::vector<double>& solid_fractions() const { return solid_fraction_; }
+  // Largest phi before the cap kMaximumSolidFraction, over the last step.
+  double largest_solid_fraction() const { return largest_solid_fraction_; }
+  static constexpr double kMaximumSolidFraction = 0.7;
+
   // Sum of m u over fluid particles [kg m/s in 3D, kg m/s per m in 2D].
   Eigen::Vector3d total_fluid_momentum() const;
 
@@ -156,6 +172,8 @@ class FluidSystem {
   // i where moved[i] != 0 (the collision stage moves few particles): only those are refreshed.
   void update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report,
                          const std::vector<int>* moved = nullptr);
+  // phi_i at `x` from the solid volumes (solid_volume.cpp); zeros without them.
+  void update_solid_fractions(const std::vector<Eigen::Vector3d>& x);
 
   MpsParameters parameters_;
   std::vector<Eigen::Vector3d> positions_;
@@ -164,6 +182,9 @@ class FluidSystem {
   std::vector<ParticleKind> kinds_;
   std::vector<double> number_densities_;
   std::vector<Eigen::Vector3d> external_accelerations_;
+  std::vector<Eigen::Vector3d> solid_points_;
+  std::vector<double> solid_volumes_, solid_fraction_;
+  double solid_radius_ = 0.0, largest_solid_fraction_ = 0.0;
   double time_ = 0.0;
   long step_ = 0;
   double particle_mass_ = 0.0;
