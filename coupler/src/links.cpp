@@ -17,10 +17,19 @@ SolidLink::SolidLink(Participant& participant, const scenario::Scene& scene,
 
 void SolidLink::publish_state(std::span<const Eigen::Vector3d> positions,
                               std::span<const Eigen::Vector3d> velocities,
-                              std::span<const Eigen::Vector3d> drag) {
+                              std::span<const Eigen::Vector3d> drag,
+                              std::span<const double> volumes) {
   participant_.publish(exchange::kPositions, exchange::pack(positions));
   participant_.publish(exchange::kVelocities, exchange::pack(velocities));
   participant_.publish(exchange::kDrag, exchange::pack(drag));
+  if (!volumes.empty() && volumes.size() != positions.size()) {
+    throw CouplingError(fmt::format("field '{}' of '{}': {} volumes for {} points",
+                                    exchange::kVolumes, participant_.name(), volumes.size(),
+                                    positions.size()));
+  }
+  if (!volumes.empty() || exchange::displaces_water(participant_.name())) {
+    participant_.publish(exchange::kVolumes, std::vector<double>(volumes.begin(), volumes.end()));
+  }
 }
 
 AmbientFlow SolidLink::receive(int64_t flow_window) {
@@ -68,7 +77,7 @@ FlowLink::FlowLink(Participant& participant, const scenario::Scene& scene, Solve
   for (const auto* solid : scene.solids()) solids_.push_back(solid->acts_as);
 }
 
-std::vector<SolidForcing> FlowLink::receive_solids(const Window& window) {
+std::vector<SolidForcing> FlowLink::receive_solids(const Window& window, bool with_volumes) {
   const int64_t solid_window = exchange::solid_window_for_flow(window.index);
   // The drag of window k-1 acted on the solids for dt_{k-1}; spread over dt_k it gives the flow
   // the same impulse (adaptive windows change length).
@@ -87,8 +96,19 @@ std::vector<SolidForcing> FlowLink::receive_solids(const Window& window) {
                          what(exchange::kVelocities));
     const auto drag = exchange::unpack(participant_.receive(name, exchange::kDrag, solid_window),
                                        count, what(exchange::kDrag));
+    std::vector<double> volumes(count, 0.0);
+    if (with_volumes && exchange::displaces_water(name)) {
+      volumes = participant_.receive(name, exchange::kVolumes, solid_window);
+    }
+    if (volumes.size() != count) {
+      throw CouplingError(fmt::format("{}: expected {} values, got {}", what(exchange::kVolumes),
+                                      count, volumes.size()));
+    }
     SolidForcing state;
     state.name = name;
+    // 2D: the slice of the span the flow stands for holds volume / span of each solid.
+    const double per_measure = frame_.span() > 0.0 ? 1.0 / frame_.span() : 1.0;
+    for (const double v : volumes) state.volumes.push_back(v * per_measure);
     state.positions.reserve(count);
     state.velocities.reserve(count);
     state.reaction.reserve(count);

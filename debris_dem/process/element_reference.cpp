@@ -107,23 +107,70 @@ void ElementReference::report_floating(coupler::MetricsReport& report) const {
   }
   report.compare("draft", draft, reference_, "m",
                  "Archimedes: submerged share equals the density ratio");
-  // Heave: successive maxima of z after the first contact with the water; their ratio is the
-  // decay per period.
-  std::vector<double> peaks, peak_times;
-  for (std::size_t i = 1; i + 1 < heights_.size(); ++i) {
-    if (!std::isfinite(drafts_[i]) || drafts_[i] <= 0.0) continue;
-    if (heights_[i] > heights_[i - 1] && heights_[i] >= heights_[i + 1]) {
-      peaks.push_back(heights_[i]);
-      peak_times.push_back(times_[i]);
+  report_heave(report);
+}
+
+void ElementReference::report_heave(coupler::MetricsReport& report) const {
+  // Heave about the settled height (the mean z over the averaging window), smoothed over
+  // +-10 ms. A period runs from one upward crossing to the next; its amplitude is its largest
+  // excursion. The decay per period is the geometric mean of successive amplitude ratios over
+  // the first five periods after the element first touched the water.
+  const double settled = mean_from(times_, heights_, settings_.average_from);
+  std::size_t first_wet = 0;
+  while (first_wet < drafts_.size() &&
+         !(std::isfinite(drafts_[first_wet]) && drafts_[first_wet] > 0.0)) {
+    ++first_wet;
+  }
+  if (!std::isfinite(settled) || first_wet + 2 >= times_.size()) return;
+  std::vector<double> deviation(times_.size(), 0.0);
+  std::size_t low = first_wet, high = first_wet;  // window [low, high) of times within 10 ms
+  double sum = 0.0;
+  for (std::size_t i = first_wet; i < times_.size(); ++i) {
+    while (high < times_.size() && times_[high] <= times_[i] + 0.01) sum += heights_[high++];
+    while (times_[low] < times_[i] - 0.01) sum -= heights_[low++];
+    deviation[i] = sum / static_cast<double>(high - low) - settled;
+  }
+  // RMS heave over the first second in the water and over the averaging window.
+  auto rms = [&](double from, double to) {
+    double sum = 0.0;
+    int count = 0;
+    for (std::size_t i = first_wet; i < times_.size(); ++i) {
+      if (times_[i] < from || times_[i] > to) continue;
+      sum += deviation[i] * deviation[i];
+      ++count;
+    }
+    return count > 0 ? std::sqrt(sum / count) : std::nan("");
+  };
+  const double early = rms(times_[first_wet], times_[first_wet] + 1.0);
+  const double late = rms(settings_.average_from, times_.back());
+  report.value("heave_rms_first_second", early, "m");
+  report.value("heave_rms_averaging_window", late, "m");
+  // Periods between upward crossings, each counted only after the heave went below -h
+  // (h = half the late RMS): jitter around the settled height makes no crossings.
+  const double h = 0.5 * late;
+  std::vector<double> crossings, amplitudes;
+  double largest = 0.0;
+  bool below = false;
+  for (std::size_t i = first_wet + 1; i < times_.size(); ++i) {
+    largest = std::max(largest, std::abs(deviation[i]));
+    if (deviation[i] < -h) below = true;
+    if (below && deviation[i] >= h) {
+      if (!crossings.empty()) amplitudes.push_back(largest);
+      crossings.push_back(times_[i]);
+      largest = 0.0;
+      below = false;
     }
   }
-  const double final_height = heights_.empty() ? 0.0 : heights_.back();
-  if (peaks.size() >= 2) {
-    const double first = peaks[0] - final_height, second = peaks[1] - final_height;
-    report.value("heave_decay_ratio", first != 0.0 ? second / first : 0.0, "");
-    report.value("heave_period", peak_times[1] - peak_times[0], "s");
+  report.info()["heave_periods"] = amplitudes.size();
+  if (amplitudes.size() < 2) return;
+  const std::size_t last = std::min<std::size_t>(amplitudes.size() - 1, 5);
+  report.value("heave_decay_ratio", std::pow(amplitudes[last] / amplitudes[0], 1.0 / last), "");
+  std::vector<double> periods;
+  for (std::size_t k = 1; k < crossings.size(); ++k) {
+    periods.push_back(crossings[k] - crossings[k - 1]);
   }
-  report.info()["heave_peaks"] = peaks.size();
+  std::nth_element(periods.begin(), periods.begin() + periods.size() / 2, periods.end());
+  report.value("heave_period", periods[periods.size() / 2], "s");  // median
 }
 
 double richardson_zaki_exponent(double re) {

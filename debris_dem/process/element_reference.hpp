@@ -44,6 +44,7 @@ class ElementReference {
  private:
   void report_settling(coupler::MetricsReport& report) const;
   void report_floating(coupler::MetricsReport& report) const;
+  void report_heave(coupler::MetricsReport& report) const;
 
   ElementReferenceSettings settings_;
   double reference_;

@@ -208,7 +208,8 @@ class DebrisProcess final : public coupler::Solver {
   coupler::WindowResult initial_window(const coupler::Window&) override {
     series_.record(0.0, world_);
     const std::vector<Eigen::Vector3d> no_force(debris_.size(), Eigen::Vector3d::Zero());
-    link_.publish_state(world_.element_centers(), world_.element_velocities(), no_force);
+    link_.publish_state(world_.element_centers(), world_.element_velocities(), no_force,
+                        submerged_volumes());
     return {};
   }
 
@@ -237,7 +238,7 @@ class DebrisProcess final : public coupler::Solver {
     // The fluid takes back the interaction force (drag, added mass), not the buoyancy its own
     // pressure already carries (DemWorld::window_mean_interaction_force).
     link_.publish_state(world_.element_centers(), world_.element_velocities(),
-                        world_.window_mean_interaction_force());
+                        world_.window_mean_interaction_force(), submerged_volumes());
     return {step.substeps, 0.0};
   }
 
@@ -249,6 +250,17 @@ class DebrisProcess final : public coupler::Solver {
   }
 
  private:
+  // Water each moving element displaces [m^3]: its submerged share of its volume.
+  std::vector<double> submerged_volumes() const {
+    std::vector<double> volumes;
+    volumes.reserve(debris_.size());
+    const auto& fraction = world_.submerged_fraction();
+    for (std::size_t k = 0; k < debris_.size(); ++k) {
+      volumes.push_back(fraction[k] * world_.volume(debris_[k]));
+    }
+    return volumes;
+  }
+
   static dem::DebrisConfig parse(coupler::ProcessContext& context) {
     auto section = context.section();
     return dem::parse_config(section, context.scene);

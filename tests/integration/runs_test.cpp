@@ -4,11 +4,19 @@
 
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <fstream>
 #include <functional>
 #include <future>
+#include <sstream>
+#include <thread>
 
 #include "command.hpp"
+#include "cosim/coupler/event_log_file.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/replay/recording.hpp"
 #include "cosim/scenario/section.hpp"
@@ -28,7 +36,7 @@ TEST(Runs, BladeRunWritesEveryOutputOfARunFolder) {
   const auto run_dir = run_folder_of(result);
   ASSERT_FALSE(run_dir.empty()) << result.output;
   for (const char* file :
-       {"scenario.yaml", "events.lcmlog", "summary.json", "logs/vegetation_beam.log",
+       {"scenario.yaml", "events.lcmlog.zst", "summary.json", "logs/vegetation_beam.log",
         "logs/prescribed_flow.log", "vegetation_beam/plants.h5", "vegetation_beam/plants.xmf"}) {
     EXPECT_TRUE(std::filesystem::exists(run_dir / file)) << file;
   }
@@ -60,7 +68,7 @@ TEST(Runs, BladeRunWritesEveryOutputOfARunFolder) {
 std::map<std::pair<int64_t, std::string>, std::vector<double>> beam_fields(
     const std::filesystem::path& run_dir) {
   std::map<std::pair<int64_t, std::string>, std::vector<double>> fields;
-  const auto recording = replay::read_recording(run_dir / "events.lcmlog", "vegetation_beam");
+  const auto recording = replay::read_recording(run_dir / "events.lcmlog.zst", "vegetation_beam");
   for (const auto& [window, recorded] : recording.windows) {
     for (const auto& [field, values] : recorded.fields) fields[{window, field}] = values;
   }
@@ -214,6 +222,255 @@ TEST(Runs, ReplayIntoAnotherWorldIsRefusedAtTheHandshake) {
       << replayed.output;
 }
 
+// The children of `parent`, from /proc.
+std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> children;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(entry.path() / "stat");
+    std::string stat;
+    std::getline(in, stat);
+    // pid (comm) state ppid ...: comm may hold spaces, so read after its closing parenthesis.
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 2));
+    char state = 0;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent) children.push_back(std::stoi(name));
+  }
+  return children;
+}
+
+bool alive(pid_t pid) {
+  std::ifstream in(fmt::format("/proc/{}/stat", pid));
+  std::string stat;
+  if (!std::getline(in, stat)) return false;
+  const auto close = stat.rfind(')');
+  return close != std::string::npos && stat.size() > close + 2 && stat[close + 2] != 'Z';
+}
+
+struct Interrupted {
+  int exit_code = -1;
+  std::string output;
+  std::vector<pid_t> children;
+};
+
+// Starts `cosim run` on the blade, waits until its windows run, sends `signal`, and waits for
+// cosim to end (at most 30 s).
+Interrupted interrupt_blade(const std::filesystem::path& runs, const std::string& options,
+                            int signal, const std::string& ready_text = "] window ",
+                            const std::string& ready_file = "cosim.out") {
+  Interrupted interrupted;
+  const auto output_file = runs / "cosim.out";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int fd = open(output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, STDOUT_FILENO);
+    dup2(fd, STDERR_FILENO);
+    // The test executables are built beside cosim.
+    const auto bin = std::filesystem::read_symlink("/proc/self/exe").parent_path();
+    const std::string command =
+        fmt::format("exec {}/cosim run {} --runs-dir {} --progress-interval 0.2 {}", bin.string(),
+                    blade(), runs.string(), options);
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Running: `ready_text` shows in `ready_file` (in `runs` or in a run folder there); the
+  // progress lines show windows every 0.2 s.
+  auto ready = [&] {
+    std::vector<std::filesystem::path> files{runs / ready_file};
+    for (const auto& entry : std::filesystem::directory_iterator(runs)) {
+      if (entry.is_directory()) files.push_back(entry.path() / ready_file);
+    }
+    for (const auto& file : files) {
+      std::ifstream in(file);
+      const std::string text{std::istreambuf_iterator<char>(in), {}};
+      if (text.find(ready_text) != std::string::npos) return true;
+    }
+    return false;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (std::chrono::steady_clock::now() < deadline && !ready()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  interrupted.children = children_of(pid);
+  kill(pid, signal);
+  int status = 0;
+  for (int i = 0; i < 300 && waitpid(pid, &status, WNOHANG) == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  if (waitpid(pid, &status, WNOHANG) == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+  }
+  interrupted.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  std::ifstream in(output_file);
+  interrupted.output.assign(std::istreambuf_iterator<char>(in), {});
+  return interrupted;
+}
+
+void expect_clean_interruption(const Interrupted& run, const std::string& signal, int exit_code,
+                               const std::string& total) {
+  EXPECT_EQ(run.exit_code, exit_code) << run.output;
+  EXPECT_EQ(run.children.size(), 2u) << "both solvers were running when the signal came";
+  for (const pid_t child : run.children) EXPECT_FALSE(alive(child)) << "orphan " << child;
+  const std::string line = "interrupted by " + signal + " at window ";
+  EXPECT_NE(run.output.find("cosim: " + line), std::string::npos) << run.output;
+  CommandResult printed;
+  printed.output = run.output;
+  const auto run_dir = run_folder_of(printed);
+  ASSERT_FALSE(run_dir.empty()) << run.output;
+  const auto summary = read_summary(run_dir);
+  ASSERT_FALSE(summary.empty()) << run.output;
+  EXPECT_FALSE(summary["ok"].get<bool>());
+  const std::string failure = summary["failure"].get<std::string>();
+  EXPECT_EQ(failure.rfind(line, 0), 0u) << failure;
+  EXPECT_NE(failure.find(" of " + total), std::string::npos) << failure;
+  EXPECT_EQ(summary["interrupted_by"], signal);
+}
+
+TEST(Runs, SigintStopsEveryProcessAndRecordsTheInterruption) {
+  const auto runs = fresh_folder("sigint");
+  // Long enough to be running when the signal comes: 30000 windows.
+  const auto run = interrupt_blade(runs, "--set duration=30", SIGINT);
+  expect_clean_interruption(run, "SIGINT", 130, "30000");
+}
+
+TEST(Runs, SigtermStopsEvenAStoppedSolver) {
+  const auto runs = fresh_folder("sigterm");
+  // The beam stops itself (SIGSTOP) in window 5 and would wait out a 60 s timeout: SIGTERM to
+  // cosim must still end everything at once, the stopped process included.
+  const auto run =
+      interrupt_blade(runs, "--fault vegetation_beam:hang@5 --set coupling.timeout=60", SIGTERM,
+                      "injected fault: hanging in window 5", "logs/vegetation_beam.log");
+  expect_clean_interruption(run, "SIGTERM", 143, "20");
+  CommandResult printed;
+  printed.output = run.output;
+  const auto summary = read_summary(run_folder_of(printed));
+  EXPECT_EQ(summary["failure"], "interrupted by SIGTERM at window 5 of 20") << run.output;
+}
+
+// A recorded run whose beam outputs are gone: the replay must not call it identical.
+TEST(Runs, ReplayRefusesWhenTheRecordedOutputsAreMissing) {
+  const auto runs = fresh_folder("replay-missing");
+  const auto recorded =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
+  const auto run_dir = run_folder_of(recorded);
+  std::filesystem::remove(run_dir / "vegetation_beam/plants.h5");
+  const auto replayed =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run_dir.string(), runs.string()));
+  EXPECT_EQ(replayed.exit_code, 1) << replayed.output;
+  EXPECT_EQ(replayed.output.find("IDENTICAL"), std::string::npos) << replayed.output;
+  EXPECT_NE(replayed.output.find("plants.h5: missing from the recorded run"), std::string::npos)
+      << replayed.output;
+}
+
+// Byte offset of record `index` of an LCM log (28-byte headers, big-endian lengths).
+std::size_t record_offset(const std::string& log, int index) {
+  std::size_t offset = 0;
+  auto be32 = [&](std::size_t at) {
+    return (uint32_t(uint8_t(log[at])) << 24) | (uint32_t(uint8_t(log[at + 1])) << 16) |
+           (uint32_t(uint8_t(log[at + 2])) << 8) | uint32_t(uint8_t(log[at + 3]));
+  };
+  for (int i = 0; i < index; ++i) offset += 28 + be32(offset + 20) + be32(offset + 24);
+  return offset;
+}
+
+// The events of a compressed log as a plain LCM log (what `zstd -d` gives, and what runs recorded
+// before compression hold).
+std::string plain_log(const std::filesystem::path& compressed) {
+  coupler::EventLogReader reader(compressed);
+  std::string out;
+  auto be = [&](uint64_t value, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<char>(value >> (8 * i)));
+  };
+  while (const auto event = reader.next()) {
+    be(0xEDA1DA01u, 4);
+    be(static_cast<uint64_t>(event->number), 8);
+    be(static_cast<uint64_t>(event->timestamp), 8);
+    be(event->channel.size(), 4);
+    be(event->data.size(), 4);
+    out += event->channel;
+    out.append(reinterpret_cast<const char*>(event->data.data()), event->data.size());
+  }
+  return out;
+}
+
+TEST(Runs, ReplayNamesTheDamageOfACorruptedOrTruncatedLog) {
+  const auto runs = fresh_folder("replay-damaged");
+  const auto recorded =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
+  const auto run_dir = run_folder_of(recorded);
+  const auto compressed = run_dir / "events.lcmlog.zst";
+  std::string packed;
+  {
+    std::ifstream in(compressed, std::ios::binary);
+    packed.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // Compressed: a flipped byte fails its block's checksum, a cut file names the cut.
+  auto replay_compressed = [&](const std::string& bytes) {
+    std::ofstream(compressed, std::ios::binary | std::ios::trunc) << bytes;
+    return run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                                 run_dir.string(), runs.string()));
+  };
+  std::string flipped = packed;
+  flipped[packed.size() / 3] = static_cast<char>(flipped[packed.size() / 3] ^ 0x5a);
+  const auto corrupt = replay_compressed(flipped);
+  EXPECT_NE(corrupt.exit_code, 0);
+  EXPECT_NE(corrupt.output.find("events.lcmlog.zst is damaged at byte"), std::string::npos)
+      << corrupt.output;
+  const auto cut = replay_compressed(packed.substr(0, packed.size() / 2));
+  EXPECT_NE(cut.exit_code, 0);
+  EXPECT_NE(cut.output.find("cut short"), std::string::npos) << cut.output;
+  std::ofstream(compressed, std::ios::binary | std::ios::trunc) << packed;
+  // Plain (an older run): the record-by-record reader names byte and record.
+  const std::string log = plain_log(compressed);
+  std::filesystem::remove(compressed);
+  const auto log_file = run_dir / "events.lcmlog";
+  auto replay_with = [&](const std::string& bytes) {
+    std::ofstream(log_file, std::ios::binary | std::ios::trunc) << bytes;
+    return run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                                 run_dir.string(), runs.string()));
+  };
+  const std::size_t at = record_offset(log, 40);
+  std::string corrupted = log;
+  corrupted.replace(at, 4, "JUNK");
+  const auto damaged = replay_with(corrupted);
+  EXPECT_NE(damaged.exit_code, 0);
+  EXPECT_NE(damaged.output.find(fmt::format(
+                "events.lcmlog: damaged at byte {} (record 40): expected the record marker "
+                "0xEDA1DA01, found 0x4A554E4B",
+                at)),
+            std::string::npos)
+      << damaged.output;
+  const auto truncated = replay_with(log.substr(0, log.size() - 10));
+  EXPECT_NE(truncated.exit_code, 0);
+  EXPECT_NE(truncated.output.find("(truncated)"), std::string::npos) << truncated.output;
+  EXPECT_EQ(truncated.output.find("is not in the recording"), std::string::npos)
+      << truncated.output;
+}
+
+// A run that failed in window 5 is replayed over the four windows it completed.
+TEST(Runs, AFailedRunIsReplayedUpToItsLastWholeWindow) {
+  const auto runs = fresh_folder("replay-failed");
+  const auto recorded = run_cosim(fmt::format(
+      "run {} --runs-dir {} --quiet --fault vegetation_beam:exit@5", blade(), runs.string()));
+  ASSERT_EQ(recorded.exit_code, 1) << recorded.output;
+  const auto replayed =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run_folder_of(recorded).string(), runs.string()));
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_NE(replayed.output.find("up to window 4 of 20 (the recorded run failed: "),
+            std::string::npos)
+      << replayed.output;
+  EXPECT_NE(replayed.output.find(": 5 windows, "), std::string::npos) << replayed.output;
+  EXPECT_NE(replayed.output.find("IDENTICAL"), std::string::npos) << replayed.output;
+}
 }  // namespace
 }  // namespace cosim::testing
 

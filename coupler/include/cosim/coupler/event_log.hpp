@@ -13,13 +13,10 @@
 #include <set>
 #include <string>
 
-namespace lcm {
-class LogFile;
-}
-
 namespace cosim::coupler {
 
 enum class RecordMode;
+class EventLogWriter;
 
 class EventRecorder {
  public:
@@ -28,18 +25,30 @@ class EventRecorder {
   EventRecorder(const EventRecorder&) = delete;
   EventRecorder& operator=(const EventRecorder&) = delete;
 
-  // One message as heard on `channel`.
+  // One message as heard on `channel`. Never throws for a write error (it runs inside LCM's C
+  // callback, which an exception must not cross): the first error stops the recording and is
+  // kept, see error() and write_failure().
   void record(const std::string& channel, const void* data, std::size_t size, int64_t utime);
+  // Flushes and closes the log; a failure (disk full) is kept like a write error. Idempotent.
+  void close();
+  // The first write error, "cannot write the event log <file>: <strerror>", or empty.
+  const std::string& error() const { return error_; }
+
+  // The error a recorder of `file` met in this process, or empty: for the launcher, which sees
+  // the log only as a file name of its run (the recorder lives inside the coupler's bus).
+  static std::string write_failure(const std::filesystem::path& file);
 
  private:
-  void write(const std::string& channel, const void* data, std::size_t size, int64_t utime);
+  void fail(const std::string& message);
+  void write(const std::string& channel, const void* data, std::size_t size, int64_t utime,
+             int64_t window);
   bool first_time(const std::string& sender, int64_t sequence);
 
   RecordMode mode_;
-  std::unique_ptr<lcm::LogFile> log_;
-  int64_t event_number_ = 0;
+  std::unique_ptr<EventLogWriter> log_;  // zstd-compressed blocks (event_log_file.hpp)
   std::map<std::string, std::set<int64_t>> recorded_;
   std::string file_;
+  std::string error_;
 };
 
 }  // namespace cosim::coupler

@@ -95,6 +95,8 @@ class EventLogReader {
   void seek_window(int64_t window);
 
   bool compressed() const { return compressed_; }
+  // File offset of the compressed data of the block the last event came from.
+  uint64_t block_offset() const { return block_offset_; }
   // The blocks of a compressed log (from the index, else from a scan); empty for plain logs.
   const std::vector<EventLogBlock>& blocks();
 

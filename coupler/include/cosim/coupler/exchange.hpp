@@ -28,6 +28,10 @@ namespace cosim::coupler::exchange {
 inline constexpr const char* kPositions = "positions";
 inline constexpr const char* kVelocities = "velocities";
 inline constexpr const char* kDrag = "drag";
+// Volume [m^3] of water each solid point displaces. Sent by the solids that displace water:
+// debris; plants are thin stems whose volume the flows leave out.
+inline constexpr const char* kVolumes = "volumes";
+inline bool displaces_water(const std::string& solid) { return solid == "debris_dem"; }
 
 inline std::string ambient_velocity_field(const std::string& solid) {
   return "ambient_velocity@" + solid;

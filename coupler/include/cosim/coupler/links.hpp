@@ -29,9 +29,11 @@ class SolidLink {
  public:
   SolidLink(Participant& participant, const scenario::Scene& scene, std::size_t point_count);
 
+  // `volumes` [m^3]: the water each point displaces; sent when given (exchange::displaces_water
+  // says which solids must).
   void publish_state(std::span<const Eigen::Vector3d> positions,
                      std::span<const Eigen::Vector3d> velocities,
-                     std::span<const Eigen::Vector3d> drag);
+                     std::span<const Eigen::Vector3d> drag, std::span<const double> volumes = {});
   // The flow at the start and the end of `window` (index >= 1). Without a flow provider in the
   // scene: still and dry.
   std::pair<AmbientFlow, AmbientFlow> ambient(const Window& window);
@@ -54,6 +56,11 @@ struct SolidForcing {
   std::vector<Eigen::Vector3d> positions;
   std::vector<Eigen::Vector3d> velocities;
   std::vector<Eigen::Vector3d> reaction;
+  // The water each point displaces, in the flow's measure: m^3 in 3D, m^2 per span width in 2D
+  // (as forces are per span). A flow that leaves this volume to the solids takes no buoyancy
+  // reaction either: its own pressure then carries the solids' weight (locally averaged
+  // equations; the solids' buoyancy is the -V grad p of that pressure).
+  std::vector<double> volumes;
 };
 
 // The flow's side of the exchange. It holds the exchange rules, so every flow provider follows
@@ -69,7 +76,9 @@ class FlowLink {
  public:
   FlowLink(Participant& participant, const scenario::Scene& scene, SolverFrame frame = {});
 
-  std::vector<SolidForcing> receive_solids(const Window& window);
+  // with_volumes: also the water the solids displace (SolidForcing::volumes; zeros for solids
+  // that displace none).
+  std::vector<SolidForcing> receive_solids(const Window& window, bool with_volumes = false);
   // Samples at the solid's points, in the flow's coordinates. surface_elevation: the vertical
   // coordinate of the free surface above each point (empty: unknown).
   void publish_samples(const std::string& solid, std::span<const Eigen::Vector3d> ambient_velocity,
