@@ -270,13 +270,17 @@ std::optional<LoggedEvent> EventLogReader::next() {
   while (block_cursor_ >= block_.size()) {
     if (!load_block(next_block_offset_)) return std::nullopt;
   }
-  const auto at = [&] { return fmt::format("{} bytes into the block at byte", block_cursor_); };
+  // damaged() names the block's byte offset; say how far into its events the damage lies.
+  const auto at = [&](const char* what) {
+    damaged(block_offset_,
+            fmt::format("{} bytes into the block's events: {}", block_cursor_, what));
+  };
   if (block_.size() - block_cursor_ < kLcmEventHeader) {
-    damaged(block_offset_, at() + " " + std::to_string(block_offset_) + ": a cut event");
+    at("a cut event");
   }
   const uint8_t* p = block_.data() + block_cursor_;
   if (get_be(p, 4) != kLcmSync) {
-    damaged(block_offset_, at() + " " + std::to_string(block_offset_) + ": no event sync word");
+    at("no event sync word");
   }
   LoggedEvent event;
   event.number = static_cast<int64_t>(get_be(p + 4, 8));
@@ -284,7 +288,7 @@ std::optional<LoggedEvent> EventLogReader::next() {
   const std::size_t channel_length = get_be(p + 20, 4);
   const std::size_t data_length = get_be(p + 24, 4);
   if (block_.size() - block_cursor_ - kLcmEventHeader < channel_length + data_length) {
-    damaged(block_offset_, at() + " " + std::to_string(block_offset_) + ": a cut event");
+    at("a cut event");
   }
   p += kLcmEventHeader;
   event.channel.assign(reinterpret_cast<const char*>(p), channel_length);
@@ -369,15 +373,11 @@ void EventLogReader::seek_window(int64_t window) {
     plain_offset_ = 0;  // plain logs have no index: read from the start
     return;
   }
+  // The first block reaching `window`, else the last one.
   const auto& all = blocks();
-  uint64_t offset = all.empty() ? 0 : all.front().offset;
-  for (const auto& block : all) {
-    if (block.last_window >= window) {
-      offset = block.offset;
-      break;
-    }
-    offset = block.offset;
-  }
+  const auto found = std::find_if(all.begin(), all.end(),
+                                  [&](const EventLogBlock& b) { return b.last_window >= window; });
+  const uint64_t offset = all.empty() ? 0 : (found != all.end() ? found : all.end() - 1)->offset;
   block_.clear();
   block_cursor_ = 0;
   next_block_offset_ = offset;

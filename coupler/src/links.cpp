@@ -107,8 +107,7 @@ std::vector<SolidForcing> FlowLink::receive_solids(const Window& window, bool wi
     SolidForcing state;
     state.name = name;
     // 2D: the slice of the span the flow stands for holds volume / span of each solid.
-    const double per_measure = frame_.span() > 0.0 ? 1.0 / frame_.span() : 1.0;
-    for (const double v : volumes) state.volumes.push_back(v * per_measure);
+    for (const double v : volumes) state.volumes.push_back(v / frame_.span());  // 3D: span 1
     state.positions.reserve(count);
     state.velocities.reserve(count);
     state.reaction.reserve(count);
