@@ -157,7 +157,8 @@ void Bus::publish_unsequenced(const std::string& channel, const Message& message
 
 void Bus::publish_window(const Stamp& stamp, int8_t command, int64_t total_windows,
                          const std::string& reason,
-                         const std::vector<std::pair<double, double>>& windows) {
+                         const std::vector<std::pair<double, double>>& windows,
+                         const std::vector<int64_t>& checkpoints) {
   std::lock_guard lock(publish_mutex_);
   cosim_msgs::window_t message;
   message.header = make_header(stamp, options_.name);
@@ -169,6 +170,8 @@ void Bus::publish_window(const Stamp& stamp, int8_t command, int64_t total_windo
     message.window_times.push_back(time);
     message.window_dts.push_back(dt);
   }
+  message.checkpoint_count = static_cast<int32_t>(checkpoints.size());
+  message.checkpoint_windows = checkpoints;
   publish_sequenced(kWindowChannel, message);
 }
 

@@ -21,10 +21,16 @@ using cosim_msgs::window_t;
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
+
+std::vector<std::pair<std::string, std::string>> names_of(const scenario::Scene& scene) {
+  std::vector<std::pair<std::string, std::string>> names;
+  for (const auto& entry : scene.participants) names.emplace_back(entry.acts_as, entry.name);
+  return names;
+}
 }  // namespace
 
 Coupler::Coupler(const scenario::Scene& scene, CouplerOptions options)
-    : scene_(scene), options_(std::move(options)) {
+    : scene_(scene), options_(std::move(options)), book_(options_.checkpoints, names_of(scene)) {
   BusOptions bus_options;
   bus_options.url = options_.url;
   bus_options.run_id = options_.run_id;
@@ -160,6 +166,14 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   const double resend = scene_.coupling.resend_interval;
   plan_.assign(1, {0.0, 0.0});  // window 0 exchanges initial states
   double next_time = 0.0;
+  // A restart's first window is the checkpoint's window N again (dt 0: its fields published
+  // again), and window N + 1 starts where the checkpoint stands.
+  const int64_t first = options_.restart ? options_.restart->window : 0;
+  if (options_.restart) {
+    plan_.assign(static_cast<std::size_t>(first) + 1, {0.0, 0.0});
+    plan_[first] = {options_.restart->time, 0.0};
+    next_time = options_.restart->time;
+  }
   bool plan_complete = false;
   std::map<int64_t, double> stable_dt;  // smallest stable dt reported per window
   auto plan_next = [&] {
@@ -183,15 +197,16 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
     next_time =
         adaptive ? next_time + dt
                  : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
+    book_.plan(index, plan_.back().first, next_time);
     // Adaptive windows may need more than the nominal count.
     result.total_windows = std::max(result.total_windows, index);
   };
 
   std::map<std::string, int64_t> done;  // highest window each participant finished, in order
   std::map<std::string, std::map<int64_t, status_t>> early;  // DONEs heard out of order
-  for (const auto& name : names_) done[name] = -1;
-  int64_t completed = -1;
-  int64_t granted = -1;
+  for (const auto& name : names_) done[name] = first - 1;
+  int64_t completed = first - 1;
+  int64_t granted = first - 1;
   auto last_broadcast = Clock::now();
   auto last_check = Clock::now();
   Clock::time_point window_one_started{};
@@ -199,7 +214,8 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
     std::vector<std::pair<double, double>> windows(plan_.begin() + (completed + 1),
                                                    plan_.begin() + (granted + 1));
     bus_->publish_window(Stamp{completed + 1, windows.front().first, windows.front().second},
-                         window_t::COMMAND_ADVANCE, result.total_windows, "", windows);
+                         window_t::COMMAND_ADVANCE, result.total_windows, "", windows,
+                         book_.pending(granted));
     last_broadcast = Clock::now();
   };
   auto accept = [&](const status_t& status) {
@@ -250,6 +266,10 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
           throw Failure(fmt::format("'{}' failed in {}: {}", sender,
                                     window_text(status.header.window), status.message));
         }
+        if (status.state == status_t::STATE_CHECKPOINTED) {
+          book_.answer(status);
+          continue;
+        }
         if (status.state != status_t::STATE_DONE || !done.contains(sender)) continue;
         if (status.header.window <= done[sender]) continue;
         early[sender].emplace(status.header.window, std::move(status));
@@ -284,6 +304,13 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
           if (entry.name == exit.name) acts_as = entry.acts_as;
         }
         const int64_t window = done.contains(acts_as) ? done[acts_as] + 1 : completed + 1;
+        if (exit.interrupted && granted > first) {
+          // Stopped from outside: save the state after the last window granted (no participant
+          // is past it) before the run ends.
+          book_.request(granted, end_of(granted));
+          await_checkpoints(processes, granted, true);
+          if (book_.complete(granted)) result.windows_completed = granted;
+        }
         throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(),
                                   window_text(window), exit.name));
       }
@@ -292,6 +319,7 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
       }
     }
   }
+  await_checkpoints(processes, granted, false);
   const double windows_wall =
       window_one_started == Clock::time_point{} ? 0.0 : seconds_since(window_one_started);
   double physics_sum = 0.0;
@@ -308,6 +336,54 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   result.overhead_ms_per_window =
       completed >= 1 ? 1e3 * result.overhead_seconds / static_cast<double>(completed) : 0.0;
   return next_time;
+}
+
+double Coupler::end_of(int64_t index) const {
+  if (scene_.coupling.adaptive_window) return plan_[index].first + plan_[index].second;
+  return std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
+}
+
+void Coupler::await_checkpoints(ProcessGroup& processes, int64_t granted, bool interrupted) {
+  auto last_broadcast = Clock::now() - std::chrono::hours(1);
+  const double resend = scene_.coupling.resend_interval;
+  book_.forget_after(granted);  // planned, but the run stops before them
+  while (book_.outstanding()) {
+    if (seconds_since(last_broadcast) >= resend) {
+      const auto windows = book_.pending(granted);
+      bus_->publish_window(Stamp{windows.front(), end_of(windows.front()), 0.0},
+                           window_t::COMMAND_CHECKPOINT, scene_.total_windows(), "", {}, windows);
+      last_broadcast = Clock::now();
+    }
+    bus_->poll(resend);
+    auto& statuses = bus_->statuses();
+    try {
+      while (!statuses.empty()) {
+        const status_t status = std::move(statuses.front());
+        statuses.pop_front();
+        if (status.state == status_t::STATE_CHECKPOINTED) book_.answer(status);
+        if (status.state == status_t::STATE_FAILED) {
+          throw Failure(fmt::format("'{}' failed while writing a checkpoint: {}",
+                                    status.header.sender, status.message));
+        }
+      }
+      if (!interrupted) check_processes(processes, "a checkpoint");
+      // Stopped from outside, the run must end at once: a participant whose heartbeat (every
+      // timeout / 10, at most 0.5 s) has stopped for 2.5 s is hung, and the run ends without
+      // a checkpoint.
+      const double limit =
+          interrupted ? std::min(2.5, scene_.coupling.timeout) : scene_.coupling.timeout;
+      for (const auto& name : book_.waiting_for()) {
+        const auto heard = bus_->last_heard(name);
+        if (heard && std::chrono::duration<double>(Clock::now() - *heard).count() > limit) {
+          throw Failure(fmt::format("'{}' stopped answering during a checkpoint", name));
+        }
+      }
+    } catch (const Failure& failure) {
+      if (!interrupted) throw;
+      spdlog::error("no checkpoint of the interrupted run: {}", failure.what());
+      return;
+    }
+  }
 }
 
 void Coupler::finish(ProcessGroup& processes, int64_t index, double time) {
@@ -369,6 +445,7 @@ RunResult Coupler::run(ProcessGroup& processes) {
   result.wall_seconds = seconds_since(started_);
   for (const auto& name : names_) result.participants.push_back(reports_[name]);
   result.traffic = bus_->counters();
+  result.checkpoints = book_.written();
   return result;
 }
 

@@ -138,4 +138,16 @@ void FlowLink::publish_samples(const std::string& solid,
   participant_.publish(exchange::surface_field(solid), surface);
 }
 
+void FlowLink::save_checkpoint(checkpoint::Writer& out) const {
+  out.value("flow_link.previous_dt", previous_dt_);
+  out.value("flow_link.booked_impulse", booked_impulse_);
+  out.value("flow_link.out_of_plane_impulse", out_of_plane_impulse_);
+}
+
+void FlowLink::load_checkpoint(const checkpoint::Reader& in) {
+  previous_dt_ = in.value<double>("flow_link.previous_dt");
+  booked_impulse_ = in.value<Eigen::Vector3d>("flow_link.booked_impulse");
+  out_of_plane_impulse_ = in.value<Eigen::Vector3d>("flow_link.out_of_plane_impulse");
+}
+
 }  // namespace cosim::coupler

@@ -107,6 +107,41 @@ void Participant::heartbeat_loop() {
   }
 }
 
+void Participant::start_at(int64_t window) {
+  current_.index = window - 1;
+  current_done_ = true;
+}
+
+void Participant::take_checkpoint_requests(const cosim_msgs::window_t& message) {
+  for (const int64_t window : message.checkpoint_windows) {
+    if (const auto written = checkpoints_written_.find(window);
+        written != checkpoints_written_.end()) {
+      // Asked again: the answer may have been lost.
+      if (message.command == cosim_msgs::window_t::COMMAND_CHECKPOINT &&
+          seconds_since(last_checkpoint_answer_) >= options_.resend_interval) {
+        bus_->publish_status(Stamp{window, current_.time, 0.0}, [&] {
+          cosim_msgs::status_t status{};
+          status.state = cosim_msgs::status_t::STATE_CHECKPOINTED;
+          status.message = written->second;
+          status.field_count = 0;
+          return status;
+        }());
+        last_checkpoint_answer_ = Clock::now();
+      }
+      continue;
+    }
+    // A window already left behind cannot be saved any more; the coupler never asks for one.
+    if (window >= current_.index) checkpoint_requests_.insert(window);
+  }
+}
+
+void Participant::checkpointed(const std::string& description_json) {
+  const ApiTimer timer(*this);
+  checkpoints_written_[current_.index] = description_json;
+  publish_state(cosim_msgs::status_t::STATE_CHECKPOINTED, 0, 0.0, description_json);
+  last_checkpoint_answer_ = Clock::now();
+}
+
 void Participant::check_abort() {
   for (const auto& window : bus_->windows()) {
     if (window.command == cosim_msgs::window_t::COMMAND_ABORT) {
@@ -147,7 +182,11 @@ Window Participant::next_window() {
           throw CouplingError(fmt::format("the coupler aborted the run: {}", message.reason));
         case cosim_msgs::window_t::COMMAND_RELEASE:
           break;
+        case cosim_msgs::window_t::COMMAND_CHECKPOINT:
+          take_checkpoint_requests(message);
+          break;
         case cosim_msgs::window_t::COMMAND_ADVANCE: {
+          take_checkpoint_requests(message);
           // A grant of one or more windows; older grants repeat what newer ones say.
           const auto granted = static_cast<std::size_t>(std::max(0, message.window_count));
           auto grant = [&](int64_t window, double time, double dt) {
@@ -168,6 +207,12 @@ Window Participant::next_window() {
           break;
       }
     }
+    if (current_done_ && checkpoint_requests_.erase(current_.index) > 0) {
+      Window checkpoint = current_;
+      checkpoint.checkpoint = true;
+      wait_seconds_ += seconds_since(wait_start);
+      return checkpoint;
+    }
     std::optional<Window> next;
     if (const auto found = granted_.find(current_.index + 1); found != granted_.end()) {
       next = found->second;
@@ -178,6 +223,7 @@ Window Participant::next_window() {
       std::erase_if(granted_, [&](const auto& item) { return item.first <= next->index; });
       current_ = *next;
       current_done_ = false;
+      window_fields_.clear();
       heartbeat_window_ = current_.index;
       wait_seconds_ += seconds_since(wait_start);
       return current_;
@@ -206,6 +252,7 @@ void Participant::publish(const std::string& field, std::span<const double> valu
     entry.value_count = 0;
   }
   pending_fields_.push_back(std::move(entry));
+  window_fields_.emplace_back(field, std::vector<double>(values.begin(), values.end()));
 }
 
 void Participant::flush_inline_fields() {

@@ -23,6 +23,10 @@ std::filesystem::path ProcessContext::output_dir() const {
   return folder;
 }
 
+std::filesystem::path ProcessContext::checkpoint_folder(int64_t window) const {
+  return run_dir / "checkpoints" / fmt::format("window_{:08d}", window);
+}
+
 void ProcessContext::declare_frame(int dimension, double span, const Eigen::Vector3d& gravity) {
   FrameDeclaration declaration;
   declaration.dimension = dimension;
@@ -50,7 +54,8 @@ std::vector<std::string> process_arguments(const std::filesystem::path& executab
                                            const std::filesystem::path& run_dir,
                                            const std::string& section_name, const std::string& url,
                                            int64_t run_id, double loss_probability,
-                                           const std::string& fault) {
+                                           const std::string& fault,
+                                           const std::filesystem::path& restart_dir) {
   std::vector<std::string> arguments{executable.string(),
                                      "--scenario",
                                      resolved_scenario.string(),
@@ -68,6 +73,10 @@ std::vector<std::string> process_arguments(const std::filesystem::path& executab
     arguments.push_back("--fault");
     arguments.push_back(fault);
   }
+  if (!restart_dir.empty()) {
+    arguments.push_back("--restart");
+    arguments.push_back(restart_dir.string());
+  }
   return arguments;
 }
 
@@ -81,6 +90,7 @@ int run_process(int argc, char** argv, const std::string& program,
   double loss = 0.0;
   std::string fault;
   std::filesystem::path run_dir;
+  std::filesystem::path restart_dir;
   app.add_option("--scenario", scenario_file, "resolved scenario of the run")->required();
   app.add_option("--run-dir", run_dir, "run folder")->required();
   app.add_option("--name", section_name, "this process's key under participants");
@@ -88,6 +98,7 @@ int run_process(int argc, char** argv, const std::string& program,
   app.add_option("--run-id", run_id, "run id")->required();
   app.add_option("--inject-loss", loss, "drop this fraction of received messages (tests)")
       ->check(CLI::Range(0.0, 0.9));
+  app.add_option("--restart", restart_dir, "checkpoint folder to continue from");
   app.add_option("--fault", fault, "test fault: exit@W, hang@W or throw@W (window W)");
   try {
     app.parse(argc, argv);
@@ -103,6 +114,8 @@ int run_process(int argc, char** argv, const std::string& program,
     context.document_ = scenario::load_yaml_file(scenario_file);
     context.section_name = section_name;
     context.run_dir = run_dir;
+    context.program = program;
+    context.restart_dir = restart_dir;
     bool found = false;
     for (const auto& entry : context.scene.participants) {
       if (entry.name == section_name) {

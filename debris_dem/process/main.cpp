@@ -16,6 +16,7 @@
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/coupler/process_main.hpp"
 #include "cosim/coupler/solver_loop.hpp"
+#include "cosim/debris_dem/checkpoint.hpp"
 #include "cosim/output/point_series.hpp"
 #include "debris_scene.hpp"
 #include "dem_config.hpp"
@@ -77,6 +78,18 @@ class Series {
         values_[3 + 6 * e + c].push_back(world.position(elements_[e])[c]);
         values_[6 + 6 * e + c].push_back(world.velocity(elements_[e])[c]);
       }
+    }
+  }
+  void save(checkpoint::Writer& out) const {
+    out.vector("debris_process.series_times", times_);
+    for (std::size_t k = 0; k < values_.size(); ++k) {
+      out.vector("debris_process.series_" + std::to_string(k), values_[k]);
+    }
+  }
+  void load(const checkpoint::Reader& in) {
+    times_ = in.vector<double>("debris_process.series_times");
+    for (std::size_t k = 0; k < values_.size(); ++k) {
+      values_[k] = in.vector<double>("debris_process.series_" + std::to_string(k));
     }
   }
   void write(output::PointSeriesWriter& writer) const {
@@ -247,6 +260,20 @@ class DebrisProcess final : public coupler::Solver {
     finish_report(world_, config_, scene_, totals_, report);
     if (reference_) reference_->report(report);
     if (suspension_) suspension_->report(report);
+  }
+
+  // The elements through the library, and this process's series and totals. The settling
+  // behind a gate is redone when the scene is built (it comes before t = 0); the references'
+  // observations start again at the restart.
+  void save_checkpoint(checkpoint::Writer& out) const override {
+    dem::save_checkpoint(world_, out);
+    series_.save(out);
+    out.value("debris_process.totals", totals_);
+  }
+  void load_checkpoint(const checkpoint::Reader& in) override {
+    dem::load_checkpoint(world_, in);
+    series_.load(in);
+    totals_ = in.value<RunTotals>("debris_process.totals");
   }
 
  private:

@@ -9,33 +9,21 @@
 #include "cosim/coupler/links.hpp"
 #include "cosim/coupler/process_main.hpp"
 #include "cosim/coupler/solver_loop.hpp"
+#include "cosim/fluid_mps/checkpoint.hpp"
 #include "cosim/fluid_mps/observers.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 #include "cosim/output/point_series.hpp"
 #include "fishway_report.hpp"
 #include "fluid_config.hpp"
 #include "references.hpp"
+#include "scene_3d.hpp"
 
 namespace {
 
 using namespace cosim;
 
 mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings& scene) {
-  if (parameters.dimension == 3) {  // the config admits only these two kinds in 3D
-    // dam_break: the column over the whole width; still_water_tank: `width` long (x), filled to
-    // `depth`. Water cells inside an obstacle are solid (scenes.hpp, tank_3d).
-    const bool dam = scene.kind == "dam_break";
-    const mps::Tank3d tank{dam ? scene.tank_length : scene.width,
-                           scene.tank_width,
-                           scene.tank_height,
-                           scene.obstacles,
-                           scene.wall_layers,
-                           scene.dummy_layers};
-    const Eigen::Vector3d water =
-        dam ? Eigen::Vector3d(scene.column_width, scene.tank_width, scene.column_height)
-            : Eigen::Vector3d(scene.width, scene.tank_width, scene.depth);
-    return mps::tank_3d(parameters, tank, {Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), water)});
-  }
+  if (parameters.dimension == 3) return mps::build_scene_3d(parameters, scene);  // scene_3d.hpp
   if (scene.kind == "dam_break") {
     return mps::dam_break(parameters, scene.column_width, scene.column_height, scene.tank_length,
                           scene.tank_height, scene.wall_layers, scene.dummy_layers);
@@ -212,6 +200,45 @@ class FluidProcess final : public coupler::Solver {
       info["momentum_budget_residual"] = (change - budget_sources_).norm() / budget_scale_;
     }
     info["fluid_momentum_change"] = json(config_.frame.force_to_world(change));
+  }
+
+  // The fluid's state through the library, the link's and this process's running totals. The
+  // observers' and references' time series start again at the restart (they cover what the
+  // restarted run computed).
+  void save_checkpoint(checkpoint::Writer& out) const override {
+    mps::save_checkpoint(*system_, out);
+    link_.save_checkpoint(out);
+    out.value("fluid_process.steps", steps_);
+    out.value("fluid_process.pcg_iterations", pcg_iterations_);
+    out.value("fluid_process.most_pcg_iterations", most_pcg_iterations_);
+    out.value("fluid_process.undelivered", undelivered_);
+    out.value("fluid_process.largest_solid_fraction", largest_solid_fraction_);
+    out.value("fluid_process.impulses", impulses_);
+    out.value("fluid_process.initial_momentum", initial_momentum_);
+    out.value("fluid_process.budget_sources", budget_sources_);
+    out.value("fluid_process.budget_scale", budget_scale_);
+  }
+  void load_checkpoint(const checkpoint::Reader& in) override {
+    auto state = mps::load_checkpoint(in);
+    if (state.positions.size() != static_cast<std::size_t>(system_->particle_count())) {
+      in.fail("fluid.positions", fmt::format("holds {} particles where this scene has {}",
+                                             state.positions.size(), system_->particle_count()));
+    }
+    system_ = std::make_unique<mps::FluidSystem>(config_.parameters, state);
+    if (open_boundaries_) {
+      // Its inflow control is re-derived from the restored particles.
+      open_boundaries_ = std::make_unique<mps::OpenBoundaries>(*system_, config_.scene.inflow);
+    }
+    link_.load_checkpoint(in);
+    steps_ = in.value<int64_t>("fluid_process.steps");
+    pcg_iterations_ = in.value<int64_t>("fluid_process.pcg_iterations");
+    most_pcg_iterations_ = in.value<int>("fluid_process.most_pcg_iterations");
+    undelivered_ = in.value<Eigen::Vector3d>("fluid_process.undelivered");
+    largest_solid_fraction_ = in.value<double>("fluid_process.largest_solid_fraction");
+    impulses_ = in.value<mps::FluidImpulses>("fluid_process.impulses");
+    initial_momentum_ = in.value<Eigen::Vector3d>("fluid_process.initial_momentum");
+    budget_sources_ = in.value<Eigen::Vector3d>("fluid_process.budget_sources");
+    budget_scale_ = in.value<double>("fluid_process.budget_scale");
   }
 
  private:

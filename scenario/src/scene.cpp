@@ -1,5 +1,7 @@
 #include "cosim/scenario/scene.hpp"
 
+#include "cosim/scenario/parameter_reader.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -130,6 +132,7 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
   scene.coupling = parse_coupling(root.child("coupling"));
   scene.world = parse_world(root.optional_child("world"));
   scene.output_interval = root.number("output_interval", scene.duration / 100.0, Range::positive());
+  read_parameters(root, scene.run);
   if (const double windows = std::ceil(scene.duration / scene.coupling.window - 1e-9);
       !(windows <= kMaxWindows)) {
     root.fail("duration", fmt::format("{:.6g} s in windows of {:.6g} s is {:.3g} windows, more "

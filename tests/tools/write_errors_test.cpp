@@ -23,6 +23,7 @@ std::vector<uint8_t> window_message(int64_t sequence) {
   window.command = cosim_msgs::window_t::COMMAND_ADVANCE;
   window.reason = std::string(200, 'r');
   window.window_count = 0;
+  window.checkpoint_count = 0;
   std::vector<uint8_t> bytes(static_cast<std::size_t>(window.getEncodedSize()));
   window.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;

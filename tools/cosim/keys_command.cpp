@@ -8,6 +8,7 @@
 #include "cosim/fluid_mps/parameters.hpp"
 #include "cosim/prescribed_flow/profiles.hpp"
 #include "cosim/scenario/parameters.hpp"
+#include "cosim/scenario/scene.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
 
 namespace cosim::tool {
@@ -75,6 +76,14 @@ const std::vector<Participant>& participants() {
          return std::vector<Group>{group<prescribed_flow::ProfileSettings>(
              "ProfileSettings",
              "stand_ins/prescribed_flow/include/cosim/prescribed_flow/profiles.hpp", "")};
+       }},
+      {"top level",
+       "These keys sit at the top of `scenario.yaml`, not under `participants`; `name`, "
+       "`duration`, `output_interval`, `coupling` and `world` are read in "
+       "`scenario/src/scene.cpp`.",
+       [] {
+         return std::vector<Group>{group<scenario::RunSettings>(
+             "RunSettings", "scenario/include/cosim/scenario/scene.hpp", "")};
        }},
   };
   return list;

@@ -114,6 +114,10 @@ int main(int argc, char** argv) {
 
   auto* run = app.add_subcommand("run", "run a scenario bundle");
   run->add_option("bundle", bundle, "scenario folder (or its scenario.yaml)")->required();
+  std::string restart;
+  run->add_option("--restart", restart,
+                  "continue from a coupled checkpoint of RUN_FOLDER[@TIME] (the latest one "
+                  "without @TIME)");
   add_run_options(run);
   add_overrides(run);
 
@@ -167,6 +171,10 @@ int main(int argc, char** argv) {
       // Checked before the network, so a bad scenario is reported before anything starts.
       const auto scene = tool::load_with_overrides(bundle, overrides);
       tool::check_run_request(scene, request);
+      if (!restart.empty()) {
+        request.restart = tool::parse_restart(restart);
+        tool::resolve_restart(scene, *request.restart);  // refused before the network too
+      }
       if (!ensure_network(network, argc, argv)) return 2;
       const auto outcome = tool::run_scene(scene, request);
       if (outcome.interrupted_by != 0) {

@@ -184,7 +184,8 @@ void check_run_request(const scenario::Scene& scene, const RunRequest& request) 
 namespace {
 
 nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& request,
-                          const RunOutcome& outcome, int64_t run_id, const std::string& url) {
+                          const RunOutcome& outcome, int64_t run_id, const std::string& url,
+                          const std::optional<ResolvedRestart>& restart) {
   const auto& result = outcome.result;
   nlohmann::json summary;
   summary["scene"] = scene.name;
@@ -200,6 +201,13 @@ nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& reques
   summary["windows_completed"] = result.windows_completed;
   summary["total_windows"] = result.total_windows;
   summary["wall_seconds"] = result.wall_seconds;
+  if (restart) {
+    summary["restarted_from"] = {{"checkpoint", restart->folder.string()},
+                                 {"window", restart->point.window},
+                                 {"time", restart->point.time},
+                                 {"build", restart->manifest.value("build", "")}};
+  }
+  summary["checkpoints"] = result.checkpoints;
   summary["injected_loss"] = request.loss_probability;
   // `cosim replay` reads this to tell a log without field values from a damaged one.
   summary["record"] = coupler::record_mode_name(request.record_mode);
@@ -238,7 +246,8 @@ nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& reques
 // log) is closed on return, so the log's write errors are known to the caller.
 void run_participants(const scenario::Scene& scene, const RunRequest& request,
                       const coupler::CouplerOptions& options, const std::string& label,
-                      coupler::ProcessGroup& processes, RunOutcome& outcome) {
+                      const std::filesystem::path& restart_folder, coupler::ProcessGroup& processes,
+                      RunOutcome& outcome) {
   // The progress lines (with an estimate of the time left) come from the monitor below, which
   // listens to the coupler's window broadcasts.
   coupler::Coupler coupler(scene, options);
@@ -259,11 +268,12 @@ void run_participants(const scenario::Scene& scene, const RunRequest& request,
       fault = found->second;
     if (auto found = request.faults.find(entry.acts_as); found != request.faults.end())
       fault = found->second;
-    processes.start(entry.name,
-                    coupler::process_arguments(bin / entry.executable, resolved_file,
-                                               outcome.run_dir, entry.name, options.url,
-                                               options.run_id, request.loss_probability, fault),
-                    outcome.run_dir / "logs" / (entry.name + ".log"));
+    processes.start(
+        entry.name,
+        coupler::process_arguments(bin / entry.executable, resolved_file, outcome.run_dir,
+                                   entry.name, options.url, options.run_id,
+                                   request.loss_probability, fault, restart_folder),
+        outcome.run_dir / "logs" / (entry.name + ".log"));
   }
   outcome.result = coupler.run(processes);
   const auto& result = outcome.result;
@@ -279,6 +289,9 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   // Everything the command line got wrong is refused before the run folder exists.
   check_run_request(scene, request);
   check_executables(scene);
+  // A checkpoint that does not fit is refused before the run folder exists.
+  std::optional<ResolvedRestart> restart;
+  if (request.restart) restart = resolve_restart(scene, *request.restart);
   RunOutcome outcome;
   const int64_t run_id = new_run_id();
   const std::string url = coupler::run_lcm_url(run_id);
@@ -300,10 +313,18 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   }
   options.record_mode = request.record_mode;
   options.loss_probability = request.loss_probability;
+  options.checkpoints.folder = outcome.run_dir / "checkpoints";
+  options.checkpoints.interval = scene.run.checkpoint_interval;
+  options.checkpoints.manifest = manifest_base(scene);
+  if (restart) {
+    options.restart = restart->point;
+    options.checkpoints.manifest["restarted_from"] = restart->folder.string();
+  }
 
   coupler::ProcessGroup processes;
   InterruptWatch watch(processes);
-  run_participants(scene, request, options, label, processes, outcome);
+  run_participants(scene, request, options, label, restart ? restart->folder : "", processes,
+                   outcome);
   auto& result = outcome.result;
   outcome.exit_code = result.ok ? 0 : 1;
   if (const int signal = watch.signal(); signal != 0) {
@@ -314,7 +335,7 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
     outcome.interrupted_by = signal;
     outcome.exit_code = 128 + signal;
   }
-  nlohmann::json summary = summary_of(scene, request, outcome, run_id, url);
+  nlohmann::json summary = summary_of(scene, request, outcome, run_id, url, restart);
   if (!options.event_log.empty()) {
     if (const auto error = coupler::EventRecorder::write_failure(options.event_log);
         !error.empty()) {

@@ -3,11 +3,13 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cosim/coupler/coupler.hpp"
 #include "cosim/scenario/scene.hpp"
+#include "restart.hpp"
 
 namespace cosim::tool {
 
@@ -20,6 +22,8 @@ struct RunRequest {
   double loss_probability = 0.0;  // injected loss of received messages, every process
   coupler::RecordMode record_mode = coupler::RecordMode::all;  // what events.lcmlog keeps
   std::map<std::string, std::string> faults;  // participant -> "exit@W" / "hang@W" / "throw@W"
+  // Continue from a coupled checkpoint of an earlier run (checked before anything starts).
+  std::optional<RestartSource> restart;
   bool show_progress = true;
   double progress_interval =
       0.0;  // seconds between progress lines; 0: 1 s on a terminal, else 10 s

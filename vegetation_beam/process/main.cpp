@@ -16,6 +16,7 @@
 #include "cosim/coupler/solver_loop.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/vegetation_beam/canopy_metrics.hpp"
+#include "cosim/vegetation_beam/checkpoint.hpp"
 #include "elastica.hpp"
 #include "vegetation_config.hpp"
 
@@ -216,6 +217,39 @@ class VegetationProcess final : public coupler::Solver {
     info["last_window_drag_impulse"] = {last_drag_impulse_.x(), last_drag_impulse_.y(),
                                         last_drag_impulse_.z()};
     info["elastic_energy"] = field_.elastic_energy();
+  }
+
+  // The plants through the library, and this process's tip series and totals. The honami
+  // amplitude tracker starts again at the restart.
+  void save_checkpoint(checkpoint::Writer& out) const override {
+    vegetation::save_checkpoint(field_, out);
+    out.vector("vegetation_process.times", times_);
+    out.vector("vegetation_process.tip_streamwise", tip_streamwise_);
+    out.vector("vegetation_process.tip_height", tip_height_);
+    out.vector("vegetation_process.water", water_);
+    out.value("vegetation_process.next_tip", next_tip_);
+    out.value("vegetation_process.node_substeps", node_substeps_);
+    const int counts[4] = {most_substeps_, most_newton_iterations_, newton_restarts_, cutbacks_};
+    out.bytes("vegetation_process.counts", counts, sizeof(int), 4);
+    out.value("vegetation_process.drag_impulse", drag_impulse_);
+    out.value("vegetation_process.last_drag_impulse", last_drag_impulse_);
+  }
+  void load_checkpoint(const checkpoint::Reader& in) override {
+    vegetation::load_checkpoint(field_, in);
+    times_ = in.vector<double>("vegetation_process.times");
+    tip_streamwise_ = in.vector<double>("vegetation_process.tip_streamwise");
+    tip_height_ = in.vector<double>("vegetation_process.tip_height");
+    in.vector_into("vegetation_process.water", water_);
+    next_tip_ = in.value<double>("vegetation_process.next_tip");
+    node_substeps_ = in.value<int64_t>("vegetation_process.node_substeps");
+    const auto counts = in.vector<int>("vegetation_process.counts");
+    if (counts.size() != 4) in.fail("vegetation_process.counts", "must hold 4 counts");
+    most_substeps_ = counts[0];
+    most_newton_iterations_ = counts[1];
+    newton_restarts_ = counts[2];
+    cutbacks_ = counts[3];
+    drag_impulse_ = in.value<Eigen::Vector3d>("vegetation_process.drag_impulse");
+    last_drag_impulse_ = in.value<Eigen::Vector3d>("vegetation_process.last_drag_impulse");
   }
 
  private:

@@ -31,6 +31,17 @@ class PrescribedFlowProcess final : public coupler::Solver {
     return {1, 0.0};
   }
   double output_time() const override { return time_; }
+  // The analytic flow keeps nothing but its clock and the impulse it booked.
+  void save_checkpoint(checkpoint::Writer& out) const override {
+    out.value("prescribed_flow.time", time_);
+    out.value("prescribed_flow.impulse_on_solids", impulse_on_solids_);
+    link_.save_checkpoint(out);
+  }
+  void load_checkpoint(const checkpoint::Reader& in) override {
+    time_ = in.value<double>("prescribed_flow.time");
+    impulse_on_solids_ = in.value<Eigen::Vector3d>("prescribed_flow.impulse_on_solids");
+    link_.load_checkpoint(in);
+  }
   void finish(coupler::MetricsReport& report) override {
     report.info()["profile"] = prescribed_flow::profile_kind_name(flow_.settings().kind);
     report.info()["impulse_on_solids"] = {impulse_on_solids_.x(), impulse_on_solids_.y(),

@@ -44,6 +44,11 @@ class ReplayProcess final : public coupler::Solver {
     return {recorded->second.steps, recorded->second.stable_dt};
   }
   double output_time() const override { return time_; }
+  // A replay plays windows by index from its log: its clock is all it keeps.
+  void save_checkpoint(checkpoint::Writer& out) const override { out.value("replay.time", time_); }
+  void load_checkpoint(const checkpoint::Reader& in) override {
+    time_ = in.value<double>("replay.time");
+  }
   void finish(coupler::MetricsReport& report) override {
     if (!recording_.metrics_json.empty()) report.merge(recording_.metrics_json);
   }

@@ -96,9 +96,11 @@ class Bus {
 
   // Publishing. Thread-safe (a heartbeat thread publishes while the main thread computes).
   // `windows`: for ADVANCE, the (start time, length) of windows stamp.window, stamp.window + 1...
+  // `checkpoints`: windows after which every participant writes a checkpoint.
   void publish_window(const Stamp& stamp, int8_t command, int64_t total_windows,
                       const std::string& reason = "",
-                      const std::vector<std::pair<double, double>>& windows = {});
+                      const std::vector<std::pair<double, double>>& windows = {},
+                      const std::vector<int64_t>& checkpoints = {});
   // Fields inside the status (field_t with chunk_count 0) are delivered with it.
   void publish_status(const Stamp& stamp, cosim_msgs::status_t status);
   // Splits values into chunks and publishes them now. `as_sender` lets a replay driver publish

@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cosim/coupler/bus.hpp"
+#include "cosim/coupler/checkpoints.hpp"
 #include "cosim/coupler/process_group.hpp"
 #include "cosim/scenario/scene.hpp"
 
@@ -22,6 +24,8 @@ struct CouplerOptions {
   RecordMode record_mode = RecordMode::all;
   double loss_probability = 0.0;
   double startup_timeout = 60.0;  // seconds for every participant to become ready
+  CheckpointOptions checkpoints;
+  std::optional<RestartPoint> restart;  // continue after this window (participants restored)
 };
 
 struct ParticipantReport {
@@ -56,6 +60,7 @@ struct RunResult {
   double overhead_ms_per_window = 0.0;
   std::vector<ParticipantReport> participants;
   Bus::Counters traffic;
+  nlohmann::json checkpoints = nlohmann::json::array();  // CheckpointBook::written()
 };
 
 class Coupler {
@@ -89,6 +94,11 @@ class Coupler {
   void finish(ProcessGroup& processes, int64_t index, double time);
   void check_processes(ProcessGroup& processes, const std::string& during);
   void check_silence(const std::vector<std::string>& pending, const std::string& during);
+  // Start of window index + 1 as planned: where a checkpoint after `index` stands in time.
+  double end_of(int64_t index) const;
+  // Waits until every requested checkpoint is written (asking again with COMMAND_CHECKPOINT).
+  // interrupted: give up quietly on a participant that fails or falls silent.
+  void await_checkpoints(ProcessGroup& processes, int64_t granted, bool interrupted);
 
   const scenario::Scene& scene_;
   CouplerOptions options_;
@@ -97,6 +107,7 @@ class Coupler {
   std::map<std::string, ParticipantReport> reports_;
   std::vector<std::pair<double, double>> plan_;  // (start, length) of window i, once known
   std::chrono::steady_clock::time_point started_;
+  CheckpointBook book_;
 };
 
 }  // namespace cosim::coupler

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cosim/checkpoint/archive.hpp"
 #include "cosim/coupler/exchange.hpp"
 #include "cosim/coupler/frame.hpp"
 #include "cosim/coupler/participant.hpp"
@@ -91,6 +92,10 @@ class FlowLink {
   const Eigen::Vector3d& booked_impulse() const { return booked_impulse_; }
   const Eigen::Vector3d& out_of_plane_impulse() const { return out_of_plane_impulse_; }
   const SolverFrame& frame() const { return frame_; }
+
+  // The link's running state (last window length, booked impulses) for checkpoints.
+  void save_checkpoint(checkpoint::Writer& out) const;
+  void load_checkpoint(const checkpoint::Reader& in);
 
  private:
   Participant& participant_;

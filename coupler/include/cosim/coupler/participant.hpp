@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -41,6 +42,8 @@ struct Window {
   double dt = 0.0;
   int64_t total_windows = 0;
   bool finish = false;  // the coupler asks for final outputs and metrics
+  // Not a window to run: write a checkpoint of the state after window `index` (just done).
+  bool checkpoint = false;
   double end_time() const { return time + dt; }
 };
 
@@ -58,8 +61,22 @@ class Participant {
   // before the first next_window().
   void declare(const std::string& declaration_json) { declaration_ = declaration_json; }
 
-  // Waits for the next window (answering the handshake and repeated windows on the way).
+  // A restarted participant's first window is `window`: the one its checkpoint was written
+  // after, run again with dt 0 to publish the saved fields (run_solver_loop). Call before the
+  // first next_window().
+  void start_at(int64_t window);
+  // Waits for the next window (answering the handshake and repeated windows on the way). When
+  // the coupler asked for a checkpoint after the window just done, returns that first, with
+  // `checkpoint` set.
   Window next_window();
+  // After a checkpoint window: the state is written; `description_json` (file, bytes, seconds)
+  // goes to the coupler for the manifest.
+  void checkpointed(const std::string& description_json);
+  // Every field published in the current window, in order (a checkpoint keeps them, so a
+  // restarted run hands its partners exactly what they would have received).
+  const std::vector<std::pair<std::string, std::vector<double>>>& published_fields() const {
+    return window_fields_;
+  }
   // Publishes a field for the current window. Fields that fit into one message together travel
   // inside the window's DONE report; larger ones go out at once in chunks.
   void publish(const std::string& field, std::span<const double> values);
@@ -89,6 +106,7 @@ class Participant {
   void heartbeat_loop();
   void check_abort();
   void flush_inline_fields();
+  void take_checkpoint_requests(const cosim_msgs::window_t& message);
   Stamp stamp() const;
   // Adds the time of one API call to api_seconds_.
   class ApiTimer {
@@ -119,6 +137,12 @@ class Participant {
   // This window's fields, for its DONE report.
   std::vector<cosim_msgs::field_t> pending_fields_;
   std::size_t pending_inline_values_ = 0;
+  std::vector<std::pair<std::string, std::vector<double>>> window_fields_;
+  // Checkpoints asked for and not yet written; those written, with their answer (repeated when
+  // the coupler asks again: an answer may be lost).
+  std::set<int64_t> checkpoint_requests_;
+  std::map<int64_t, std::string> checkpoints_written_;
+  std::chrono::steady_clock::time_point last_checkpoint_answer_{};
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_ready_{};
   std::atomic<bool> stop_heartbeat_{false};

@@ -20,6 +20,9 @@ class ProcessContext {
   std::string section_name;  // key of this process in `participants`
   std::string acts_as;       // name it publishes under
   std::filesystem::path run_dir;
+  std::string program;  // the executable's kind ("fluid_mps", "replay", ...)
+  // Checkpoint folder this run continues from (empty: a fresh start).
+  std::filesystem::path restart_dir;
   std::unique_ptr<Participant> participant;
 
   // This process's section of the resolved scenario, for its own parser.
@@ -30,6 +33,12 @@ class ProcessContext {
   // the gravity [m/s^2, world frame] its physics actually uses. Until a process calls it, it
   // declares 3D under the scene's world gravity. Call before the first window.
   void declare_frame(int dimension, double span, const Eigen::Vector3d& gravity);
+  // This process's file in a checkpoint folder (written by run_solver_loop).
+  std::filesystem::path checkpoint_file(const std::filesystem::path& folder) const {
+    return folder / (section_name + ".ckpt");
+  }
+  // The folder of the checkpoint after `window` in this run.
+  std::filesystem::path checkpoint_folder(int64_t window) const;
   // Called at the start of every window: carries out an injected fault when one is due.
   void maybe_inject_fault(int64_t window) const;
 
@@ -53,6 +62,7 @@ std::vector<std::string> process_arguments(const std::filesystem::path& executab
                                            const std::filesystem::path& run_dir,
                                            const std::string& section_name, const std::string& url,
                                            int64_t run_id, double loss_probability,
-                                           const std::string& fault);
+                                           const std::string& fault,
+                                           const std::filesystem::path& restart_dir = {});
 
 }  // namespace cosim::coupler

@@ -3,6 +3,7 @@
 // timing, done) and the final report, so every participant keeps the same protocol.
 #pragma once
 
+#include "cosim/checkpoint/archive.hpp"
 #include "cosim/coupler/metrics.hpp"
 #include "cosim/coupler/process_main.hpp"
 
@@ -26,12 +27,23 @@ class Solver {
   virtual void write_output() {}
   // After the last window: final outputs and the metrics report.
   virtual void finish(MetricsReport& report) = 0;
+  // The full state after the window just done (physics through its library's checkpoint code,
+  // plus the process's own running totals), and reading it back into a solver built from the
+  // same scene. A solver that keeps nothing across windows writes nothing.
+  virtual void save_checkpoint(checkpoint::Writer& /*out*/) const {}
+  virtual void load_checkpoint(const checkpoint::Reader& /*in*/) {}
 };
 
 // Output frames: one at window 0, one each time output_time() reaches a multiple of `interval`
 // (no drift over long runs; several windows per interval or several intervals per window both
 // give one frame per crossing), and the final state at FINISH unless it was just written.
 // interval <= 0: no frames.
+//
+// Checkpoints: when the coupler asks for one after window N, the loop writes
+// checkpoints/window_N/<name>.ckpt: the solver's state, the output clock, and the fields the
+// participant published in window N. A process started with --restart loads that file, and its
+// first window is N again (dt 0): it publishes the saved fields instead of computing, so its
+// partners' window N + 1 reads what it read in the uninterrupted run.
 void run_solver_loop(ProcessContext& context, Solver& solver, double interval);
 
 }  // namespace cosim::coupler

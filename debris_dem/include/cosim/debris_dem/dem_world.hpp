@@ -207,6 +207,9 @@ class DemWorld {
   [[nodiscard]] Eigen::Vector3d displacement(int a, int b) const;
 
  private:
+  // Reads and writes the evolving state (checkpoint.cpp); materials come from the scene.
+  friend struct DemWorldCheckpoint;
+
   int add_element(Element element, const Eigen::Vector3d& anchor, const Material& material);
   int material_index(const Material& material);
   void compute_forces(double dt);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cosim/scenario/parameters.hpp"
 #include "cosim/scenario/section.hpp"
 
 namespace cosim::scenario {
@@ -44,6 +45,23 @@ struct ParticipantEntry {
   Role role = Role::solid;
 };
 
+// Run-level keys at the top of scenario.yaml, declared like the participants' parameters (so
+// `cosim keys` lists them).
+struct RunSettings {
+  double checkpoint_interval = 0.0;  // [s] of simulated time; 0: checkpoints on SIGINT/SIGTERM only
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, RunSettings>
+void visit_parameters(P& p, V& v) {
+  v(Key("checkpoint_interval")
+        .unit("s")
+        .in(Range::non_negative())
+        .doc("simulated time between coupled checkpoints (checkpoints/ of the run folder; 0: "
+             "only when interrupted by SIGINT/SIGTERM)"),
+    p.checkpoint_interval);
+}
+
 // The most windows a scene may ask for: 1e9 windows is weeks of coupling at the fastest rates
 // measured; more is a typo in duration or window (a bigger count used to wrap round).
 inline constexpr double kMaxWindows = 1.0e9;
@@ -54,6 +72,7 @@ struct Scene {
   std::string description;
   double duration = 0.0;
   double output_interval = 0.0;
+  RunSettings run;
   CouplingSettings coupling;
   WorldSettings world;
   std::vector<ParticipantEntry> participants;  // flow provider first, then solids

@@ -248,6 +248,9 @@ class PlantField {
   Eigen::Vector3d set_mode_velocity(int plant, int mode, const Eigen::Vector3d& tip_velocity);
 
  private:
+  // Reads and writes the evolving state (checkpoint.cpp); the rest is rebuilt from the specs.
+  friend struct PlantFieldCheckpoint;
+
   // Per-plant constants derived from PlantSpec and BeamParameters (eq. 12-15).
   struct Plant {
     int first = 0;              // global index of the base node
