@@ -3,8 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <utility>
 
+#include "cosim/output/point_series.hpp"
 #include "cosim/scenario/parameter_reader.hpp"
+#include "references.hpp"
+#include "scene_3d.hpp"
 
 namespace cosim::mps {
 
@@ -42,7 +47,7 @@ OpenBoundarySettings parse_inflow(scenario::Section inflow) {
   return settings;
 }
 
-SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension) {
+SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension, double spacing) {
   SceneSettings s;
   s.kind = scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel",
                                  "open_channel", "pool_fishway", "periodic_pool"});
@@ -61,6 +66,7 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
       if ((high.array() <= low.array()).any()) box.fail("max", "must exceed min in x, y and z");
       s.obstacles.emplace_back(low, high);
     }
+    s.solids = parse_stl_solids(scene);
   }
   if (s.kind == "dam_break") {
     s.column_width = scene.number("column_width", Range::positive());
@@ -68,6 +74,13 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
     s.tank_length = scene.number("tank_length", Range::positive());
     if (s.tank_length < s.column_width) scene.fail("tank_length", "shorter than the water column");
     s.tank_height = scene.number("tank_height", Range::positive());
+    if (dimension == 3) {
+      // The column may stand anywhere along the tank (SPHERIC test 2: against the far wall).
+      s.column_x = scene.number("column_x", 0.0, Range::non_negative());
+      if (s.column_x + s.column_width > s.tank_length + 1e-12) {
+        scene.fail("column_x", "the column (column_x + column_width) ends beyond the tank");
+      }
+    }
   } else if (s.kind == "still_water_tank") {
     s.width = scene.number("width", Range::positive());
     s.depth = scene.number("depth", Range::positive());
@@ -115,6 +128,18 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
   }
   s.wall_layers = scene.integer("wall_layers", s.wall_layers, Range::between(1, 10));
   s.dummy_layers = scene.integer("dummy_layers", s.dummy_layers, Range::between(0, 10));
+  if (dimension == 3) {
+    // tank_3d rounds each size to whole cells l0 and refuses a tank of no cell along one.
+    const bool dam = s.kind == "dam_break";
+    for (const auto& [key, size] :
+         {std::pair{dam ? "tank_length" : "width", dam ? s.tank_length : s.width},
+          std::pair{"tank_width", s.tank_width}, std::pair{"tank_height", s.tank_height}}) {
+      if (std::lround(size / spacing) < 1) {
+        scene.fail(
+            key, fmt::format("{} m is less than one cell of particle_spacing {} m", size, spacing));
+      }
+    }
+  }
   return s;
 }
 
@@ -137,6 +162,64 @@ double estimated_particles(const SceneSettings& s, const MpsParameters& p) {
   return (water + (2.0 * height + length) * layers) / (l0 * l0);
 }
 
+// The process reads the frame at its start: an unreadable file or a frame it lacks is refused
+// here at the key.
+RestartSettings parse_restart(scenario::Section& restart) {
+  RestartSettings settings{restart.existing_file("file"), restart.integer("frame", -1)};
+  int frames = 0;
+  try {
+    frames = output::count_point_frames(settings.file);
+  } catch (const std::exception& error) {
+    restart.fail("file", error.what());
+  }
+  if (settings.frame >= frames || settings.frame < -frames) {
+    restart.fail("frame", fmt::format("{} has {} frames (0 to {}, or -1 to -{} from the end)",
+                                      settings.file.string(), frames, frames - 1, frames));
+  }
+  return settings;
+}
+
+// Sensors against a measured record (probe_series): the file is read here, so a malformed row
+// or a missing column is refused at its key before any process starts.
+ProbeSeriesSettings parse_probe_series(scenario::Section& reference, const FluidConfig& config) {
+  ProbeSeriesSettings s;
+  const auto file = reference.existing_file("file");
+  try {
+    s.measured = read_measured_table(file);
+  } catch (const std::runtime_error& error) {
+    reference.fail("file", error.what());
+  }
+  const double l0 = config.parameters.particle_spacing;
+  s.probe_radius = reference.number("probe_radius", 1.5 * l0, Range::positive());
+  s.gauge_half_width = reference.number("gauge_half_width", 2.0 * l0, Range::positive());
+  s.arrival_fraction = reference.number("arrival_fraction", 0.1, Range{0.0, 1.0, true});
+  auto sensors = [&](const char* key, bool gauge) {
+    std::vector<ProbeSeriesSettings::Sensor> out;
+    for (auto& entry :
+         reference.has(key) ? reference.list(key) : std::vector<scenario::Section>{}) {
+      ProbeSeriesSettings::Sensor sensor;
+      sensor.column = entry.text("column");
+      if (s.measured.column(sensor.column) < 0) {
+        entry.fail("column", fmt::format("no column '{}' in {}", sensor.column, file.string()));
+      }
+      // World [x, y, z] of a probe, [x, y] of a gauge (its depth is along z).
+      const auto at = entry.numbers("at");
+      if (at.size() != (gauge ? 2u : 3u)) {
+        entry.fail("at", gauge ? "expected [x, y]" : "expected [x, y, z]");
+      }
+      sensor.at = config.frame.to_solver(Eigen::Vector3d(at[0], at[1], gauge ? 0.0 : at[2]));
+      out.push_back(sensor);
+    }
+    return out;
+  };
+  s.pressure_probes = sensors("pressure_probes", false);
+  s.depth_gauges = sensors("depth_gauges", true);
+  if (s.pressure_probes.empty() && s.depth_gauges.empty()) {
+    reference.fail("pressure_probes", "no pressure_probes and no depth_gauges");
+  }
+  return s;
+}
+
 }  // namespace
 
 FluidConfig parse_config(scenario::Section& section, const scenario::Scene& world_scene) {
@@ -157,11 +240,11 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
   config.parameters.gravity = config.frame.to_solver(gravity);
   if (section.has("restart")) {
     auto restart = section.child("restart");
-    config.restart = RestartSettings{restart.existing_file("file"), restart.integer("frame", -1)};
+    config.restart = parse_restart(restart);
   }
   // The initial scene is still described on restart: it documents the run and sets the tank.
   config.scene = parse_scene(section.child("scene"), config.parameters.gravity.norm(),
-                             config.parameters.dimension);
+                             config.parameters.dimension, config.parameters.particle_spacing);
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
   const double particles = estimated_particles(config.scene, config.parameters);
   scenario::MemoryBudget("fluid_mps")
@@ -205,8 +288,11 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
   if (section.has("reference")) {
     auto reference = section.child("reference");
     ReferenceSettings r;
-    r.kind = reference.choice("kind", {"martin_moyce", "hydrostatic", "canopy_balance", "weirs"});
-    if (r.kind == "weirs") {
+    r.kind = reference.choice(
+        "kind", {"martin_moyce", "hydrostatic", "canopy_balance", "weirs", "probe_series"});
+    if (r.kind == "probe_series") {
+      r.probes = parse_probe_series(reference, config);
+    } else if (r.kind == "weirs") {
       if (config.scene.kind != "pool_fishway" && config.scene.kind != "periodic_pool") {
         reference.fail("kind", "weirs needs a pool_fishway or periodic_pool scene");
       }
@@ -221,6 +307,12 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
     } else if (r.kind == "martin_moyce") {
       r.file = reference.existing_file("file");
       r.column_width = reference.number("column_width", Range::positive());
+      // The process reads the curves at its start: a malformed row is refused here at the key.
+      try {
+        ReferenceTracker(r, 9.81);
+      } catch (const std::runtime_error& error) {
+        reference.fail("file", error.what());
+      }
     } else {
       r.still_depth = reference.number("still_depth", Range::positive());
       r.probe_x = reference.number("probe_x");

@@ -10,9 +10,11 @@
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fishway.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/scenes.hpp"
 #include "cosim/coupler/frame.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
+#include "probe_series.hpp"
 
 namespace cosim::mps {
 
@@ -20,12 +22,14 @@ struct SceneSettings {
   // dam_break | still_water_tank | periodic_channel | open_channel | pool_fishway | periodic_pool
   std::string kind;
   double column_width = 0, column_height = 0;  // dam_break
+  double column_x = 0;                         // dam_break in 3D: upstream face's x [m]
   double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
   double tank_length = 0, tank_height = 0;
   // dimension 3 (dam_break, still_water_tank): the tank's width across (y) and solid boxes in
   // the tank [m]
   double tank_width = 0;
   std::vector<Eigen::AlignedBox3d> obstacles;
+  std::vector<TriangleMesh> solids;  // dimension 3: closed STL surfaces [m] (scene_3d.hpp)
   double length = 0;                 // channels (the bed slope is the world's gravity tilt)
   double driving_pressure_drop = 0;  // periodic_channel: p(x_min) - p(x_max) [Pa]
   double block_height = 0;           // open_channel: height of the soluble moving wall block
@@ -50,7 +54,7 @@ struct RestartSettings {
 };
 
 struct ReferenceSettings {
-  std::string kind;  // martin_moyce | hydrostatic | canopy_balance | weirs
+  std::string kind;  // martin_moyce | hydrostatic | canopy_balance | weirs | probe_series
   std::filesystem::path file;
   double column_width = 0;           // martin_moyce: a
   std::vector<double> probe_depths;  // hydrostatic: below the still surface, at mid tank
@@ -59,6 +63,7 @@ struct ReferenceSettings {
   double average_from = 0;   // hydrostatic, weirs: time averaging starts here
   double probe_radius = 0;   // hydrostatic: particles within this radius are averaged [m]
   double canopy_height = 0;  // canopy_balance: the inflection of u(y) is expected there
+  ProbeSeriesSettings probes;  // probe_series: the sensors and the measured record
 };
 
 struct FluidConfig {

@@ -57,6 +57,8 @@ ReferenceTracker::ReferenceTracker(const ReferenceSettings& settings, double gra
                                              settings_.file.string(), line_number, line));
       }
     }
+  } else if (settings_.kind == "probe_series") {
+    probes_ = std::make_shared<ProbeSeriesReport>(settings_.probes);
   } else {
     pressure_sums_.assign(settings_.probe_depths.size(), 0.0);
   }
@@ -66,6 +68,10 @@ void ReferenceTracker::observe(const FluidSystem& system, const FluidImpulses& i
                                const ObservationPoints* observation) {
   last_time_ = system.time();
   density_ = system.parameters().density;
+  if (probes_) {
+    probes_->observe(system);
+    return;
+  }
   if (settings_.kind == "canopy_balance") {
     observation_ = observation;
     if (system.time() < settings_.average_from) return;
@@ -111,6 +117,10 @@ void ReferenceTracker::observe(const FluidSystem& system, const FluidImpulses& i
 }
 
 void ReferenceTracker::report(coupler::MetricsReport& report) const {
+  if (probes_) {
+    probes_->report(report);
+    return;
+  }
   if (settings_.kind == "canopy_balance") {
     if (!averaging_ || !observation_ || last_time_ <= average_start_) return;
     const double span = last_time_ - average_start_;
@@ -212,6 +222,7 @@ void ReferenceTracker::report(coupler::MetricsReport& report) const {
 }
 
 std::vector<ReferenceSeries> ReferenceTracker::series() const {
+  if (probes_) return probes_->series();
   if (settings_.kind != "martin_moyce") return {};
   const double a = settings_.column_width;
   const char* source = "Martin & Moyce (1952), tables 2 and 6";

@@ -1,8 +1,10 @@
 // Reference comparisons of the fluid scenes: the dam-break surge front and residual column of
-// Martin & Moyce (1952), and hydrostatic pressure in still water.
+// Martin & Moyce (1952), hydrostatic pressure in still water, and point sensors against a
+// measured record (probe_series.hpp).
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -65,6 +67,7 @@ class ReferenceTracker {
   double driving_per_area_sum_ = 0;  // summed per observation, averaged at the end
   int driving_samples_ = 0;
   double period_length_ = 1, viscosity_ = 1e-6;
+  std::shared_ptr<ProbeSeriesReport> probes_;  // probe_series (probe_series.hpp)
 };
 
 }  // namespace cosim::mps

@@ -75,6 +75,34 @@ double water_level(const FluidSystem& system, double x0, double x1) {
   return top + 0.5 * system.parameters().particle_spacing;
 }
 
+double wall_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point, double radius) {
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    const ParticleKind kind = system.kinds()[i];
+    if (kind != ParticleKind::fluid && kind != ParticleKind::wall) continue;
+    if ((system.positions()[i] - point).squaredNorm() >= radius * radius) continue;
+    sum += system.pressures()[i];
+    ++count;
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
+double water_depth_at(const FluidSystem& system, double x, double y, double half_width) {
+  const MpsParameters& p = system.parameters();
+  const double h = half_width;
+  auto tent = [h](double d) { return std::max(0.0, 1.0 - std::abs(d) / h) / h; };
+  double weight = 0.0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& r = system.positions()[i];
+    const double wx = tent(r.x() - x);
+    if (wx == 0.0) continue;
+    weight += p.dimension == 3 ? wx * tent(r.y() - y) : wx;
+  }
+  return weight * std::pow(p.particle_spacing, p.dimension);
+}
+
 GaugeLine::GaugeLine(double x, double y_min, double y_max) : x_(x), y_min_(y_min), y_max_(y_max) {}
 
 void GaugeLine::update(const FluidSystem& system) {

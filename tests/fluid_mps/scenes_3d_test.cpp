@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/observers.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 #include "quiet_settings.hpp"
 
@@ -280,4 +281,39 @@ TEST(MpsScenes3d, TriangleSurfaceSolidsAndStlFiles) {
   expect_same_particles(tank_3d(p, plain, {water}, {binary}), expected);
   EXPECT_THROW(read_stl(folder / "missing.stl"), std::runtime_error);
   std::filesystem::remove_all(folder);
+}
+
+// The sensors of the probe_series reference (observers.hpp): a depth gauge of whole cells reads
+// the still depth exactly wherever it stands, a footprint off the water reads 0, and a wall
+// pressure probe on the side wall reads rho g times its depth once the tank has settled.
+TEST(MpsScenes3d, DepthGaugeAndWallPressureProbe) {
+  const double l0 = 0.01, depth = 0.08;
+  MpsParameters p = quiet_parameters(l0);
+  p.dimension = 3;
+  p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
+  p.radius_gradient_over_l0 = 2.1;
+  p.radius_laplacian_over_l0 = 3.1;
+  FluidSystem system(p, still_water_tank_3d(p, 0.08, 0.08, depth, 0.12));
+  // Gauges at least 3 l0 from the walls, so the tent lies over water only.
+  for (const Eigen::Vector2d& at : {Eigen::Vector2d(0.04, 0.04), Eigen::Vector2d(0.0371, 0.0419),
+                                    Eigen::Vector2d(0.046, 0.031)}) {
+    EXPECT_NEAR(water_depth_at(system, at.x(), at.y(), 2.0 * l0), depth, 1e-9) << at.transpose();
+    EXPECT_NEAR(water_depth_at(system, at.x(), at.y(), 3.0 * l0), depth, 1e-9) << at.transpose();
+  }
+  EXPECT_EQ(water_depth_at(system, 0.5, 0.04, 2.0 * l0), 0.0);  // outside the tank
+  EXPECT_EQ(wall_pressure_at(system, Eigen::Vector3d(0.04, 0.04, 0.5), 1.5 * l0), 0.0);
+  // On the wall face x = 0 at mid-width, 5 cm deep; averaged over 0.15-0.3 s as the hydrostatic
+  // test does (the MPS pressure oscillates about its mean).
+  const Eigen::Vector3d sensor(0.0, 0.04, depth - 0.05);
+  double sum = 0.0;
+  int samples = 0;
+  while (system.time() < 0.3) {
+    system.step(system.stable_dt());
+    if (system.time() < 0.15) continue;
+    sum += wall_pressure_at(system, sensor, 1.5 * l0);
+    ++samples;
+  }
+  const double expected = p.density * 9.81 * 0.05;
+  EXPECT_NEAR(sum / samples, expected, 0.15 * expected);
+  std::cout << "[wall probe 3d] p = " << sum / samples << " Pa (rho g h = " << expected << ")\n";
 }

@@ -45,6 +45,19 @@ double discharge_through_line(const FluidSystem& system, double x,
                               double y_max = std::numeric_limits<double>::infinity(),
                               double band = -1.0);
 
+// Pressure a wall-mounted sensor reads [Pa]: the mean pressure of the fluid and wall particles
+// (the wall particles' pressure is solved in the Poisson equation; dummies carry none) within
+// `radius` of `point`, so a sensor on a wall face averages the water against it and the wall's
+// surface layer, wherever the lattice put the face within l0 / 2 of the drawn one. 0 if none.
+double wall_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point, double radius);
+// Water depth at a gauge [m]: the fluid volume above the horizontal position (x, y), each
+// particle's l0^3 spread over the bed by the normalised bilinear tent
+// T(dx) T(dy), T(d) = max(0, 1 - |d| / h) / h (3D; in 2D T(dx) alone, volume l0^2). The tent is
+// a box of width h convolved with itself, so on a perfect lattice with h a whole number of cells
+// the weights of a column sum to 1 / l0^2 wherever the gauge stands (still water reads its depth
+// exactly), and unlike a sharp footprint the reading does not jump when a particle crosses its
+// edge; a splash above the gauge adds its volume, not its height.
+double water_depth_at(const FluidSystem& system, double x, double y, double half_width);
 // Water level: highest fluid particle with x in [x0, x1] plus l0/2, or -inf if none.
 double water_level(const FluidSystem& system, double x0, double x1);
 
