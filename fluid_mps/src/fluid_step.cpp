@@ -21,6 +21,21 @@ void fill(std::vector<T>& v, std::size_t n, const T& value) {
   v.assign(n, value);  // no allocation once the capacity is there
 }
 
+// visit(j, r) for the partners j of i in `list` closer than about `cutoff` at x, in list order
+// (the stages compare r with their radii): distances computed here, not stored, for a stage
+// that is their only user.
+template <class Visit>
+void visit_partners(const NeighbourList& list, const std::vector<Eigen::Vector3d>& x,
+                    const PeriodicBoundary& periodic, int i, double cutoff, Visit&& visit) {
+  const double cutoff2 = cutoff * cutoff * (1.0 + 1e-12);  // as FluidSystem::near_cutoff2
+  const Eigen::Vector3d xi = x[i];
+  for (int k = list.begin(i); k < list.end(i); ++k) {
+    const int j = list.index[k];
+    const double r2 = periodic.wrap(x[j] - xi).squaredNorm();
+    if (r2 <= cutoff2) visit(j, std::sqrt(r2));
+  }
+}
+
 }  // namespace
 
 struct FluidSystem::StepConstants {
@@ -68,117 +83,70 @@ StepReport FluidSystem::step(double dt) {
   return report;
 }
 
-void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report,
-                                    const std::vector<int>* moved) {
-  const MpsParameters& p = parameters_;
-  const int n = particle_count();
-  const double l0 = p.particle_spacing;
-  const double skin = kSkinOverL0 * l0;
-  // Two particles that each moved less than half the skin are still listed if now in reach.
-  bool valid = neighbours_valid_ && static_cast<int>(search_positions_.size()) == n;
-  if (valid) {
-    double largest_move2 = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : largest_move2) if (n >= 4096)
-    for (int i = 0; i < n; ++i) {
-      if (is_inactive(kinds_[i])) continue;
-      largest_move2 =
-          std::max(largest_move2, p.periodic.wrap(x[i] - search_positions_[i]).squaredNorm());
-    }
-    valid = 4.0 * largest_move2 < skin * skin;
-  }
-  if (!valid) {
-    const double list_radius = largest_influence_radius(p) + skin;
-    include_.clear();
-    const bool any_inactive = std::any_of(kinds_.begin(), kinds_.end(), is_inactive);
-    std::vector<Eigen::Vector3d> active;
-    if (any_inactive) {
-      include_.resize(n);
-      for (int i = 0; i < n; ++i) {
-        include_[i] = is_inactive(kinds_[i]) ? 0 : 1;
-        if (include_[i]) active.push_back(x[i]);
-      }
-    }
-    NeighbourGrid grid(p.dimension,
-                       bounding_box(any_inactive ? active : x, p.dimension, list_radius),
-                       list_radius, p.periodic);
-    grid.build(x, any_inactive ? &include_ : nullptr);
-    neighbours_ = grid.neighbours(x, list_radius);
-    // Partners in ascending index order: the order of every sum is then a property of the
-    // pairs, not of the cells they were found in at the search.
-#pragma omp parallel for schedule(static) if (n >= 4096)
-    for (int i = 0; i < n; ++i) {
-      std::sort(neighbours_.index.begin() + neighbours_.begin(i),
-                neighbours_.index.begin() + neighbours_.end(i));
-    }
-    search_positions_ = x;
-    neighbours_valid_ = true;
-    ++report.neighbour_searches;
-  }
-  // Distances at x; pairs cut by a thin partition (seed 001 section 2.2(1)) at x get infinity.
-  const bool partial = valid && moved;
-  if (partial && std::none_of(moved->begin(), moved->end(), [](int m) { return m != 0; })) {
-    return;
-  }
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    const bool i_moved = partial && (*moved)[i] != 0;
-    for (int k = neighbours_.begin(i); k < neighbours_.end(i); ++k) {
-      const int j = neighbours_.index[k];
-      if (partial && !i_moved && (*moved)[j] == 0) continue;
-      neighbours_.distance[k] = p.periodic.wrap(x[j] - x[i]).norm();
-    }
-  }
-  mask_partition_crossings(neighbours_, x, p.partitions, p.periodic, &kinds_);
-}
-
 // 1. Explicit part at r^n: viscosity (seed 000 eq. (3)), gravity, driving and point forces;
 // also the number density at r^n for the density-error part of the mixed source term.
 void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   const MpsParameters& p = parameters_;
   const int n = c.n;
   const double dt = c.dt;
-  update_neighbours(positions_, report);
-  const NeighbourList& list = neighbours_;
+  gather_state();
+  update_neighbours(x_, report, true);
+  const bool masked = !p.partitions.empty();
+  // n^k only enters the mixed source term; without it walls and dummies have nothing to sum.
+  const bool mixed = p.source_term == MpsParameters::SourceTerm::mixed;
+  const double cutoff = mixed ? std::max(c.re_n, c.re_l) : c.re_l;
+  if (masked) find_near_pairs(x_, cutoff);
   const double viscous_factor = p.kinematic_viscosity * laplacian_factor(c.d, c.n0_l, c.lambda);
   fill(density_now_, n, 0.0);
-  velocity_star_ = velocities_;
-  position_star_ = positions_;
+  velocity_star_ = u_;
+  position_star_ = x_;
   fill(wall_viscous_, n, kZero);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (is_inactive(kinds_[i])) continue;
+    if (is_inactive(kind_[i])) continue;
     double density_sum = 0.0;
     Eigen::Vector3d laplacian = Eigen::Vector3d::Zero();
-    const bool fluid = is_fluid(kinds_[i]);
-    for (int k = list.begin(i); k < list.end(i); ++k) {
-      const double r = list.distance[k];
-      if (r < c.re_n) density_sum += weight(r, c.re_n);
-      if (!fluid || r >= c.re_l) continue;
-      const int j = list.index[k];
-      const Eigen::Vector3d term = (velocities_[j] - velocities_[i]) * weight(r, c.re_l);
+    const bool fluid = is_fluid(kind_[i]);
+    if (!fluid && !mixed) {
+      position_star_[i] += dt * velocity_star_[i];
+      continue;
+    }
+    auto pair = [&](int j, double r) {
+      if (mixed && r < c.re_n) density_sum += weight(r, c.re_n);
+      if (!fluid || r >= c.re_l) return;
+      const Eigen::Vector3d term = (u_[j] - u_[i]) * weight(r, c.re_l);
       laplacian += term;
-      if (!is_fluid(kinds_[j])) wall_viscous_[i] += term;
+      if (!is_fluid(kind_[j])) wall_viscous_[i] += term;
+    };
+    if (masked) {
+      for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
+        pair(near_.index[k], near_.distance[k]);
+      }
+    } else {
+      visit_partners(neighbours_, x_, p.periodic, i, cutoff, pair);
     }
     density_now_[i] = density_sum;
     if (fluid) {
       velocity_star_[i] +=
-          dt * (viscous_factor * laplacian + p.gravity + c.driving + external_accelerations_[i]);
+          dt * (viscous_factor * laplacian + p.gravity + c.driving + acceleration_[i]);
     }
     position_star_[i] += dt * velocity_star_[i];
   }
-  for (int i = 0; i < n; ++i) {
+  for (int id = 0; id < n; ++id) {  // particle order: the same sums in any internal order
+    const int i = rank_[id];
     report.wall_viscous_force += wall_viscous_[i];
-    if (is_fluid(kinds_[i])) {
-      report.external_impulse += external_accelerations_[i];
+    if (is_fluid(kind_[i])) {
+      report.external_impulse += acceleration_[i];
       report.body_impulse += p.gravity + c.driving;
     }
   }
   report.external_impulse *= particle_mass_ * dt;
   report.body_impulse *= particle_mass_ * dt;
   report.wall_viscous_force *= particle_mass_ * viscous_factor;
-  for (int i = 0; i < n; ++i) {
+  for (int id = 0; id < n; ++id) {
+    const int i = rank_[id];
     if (!position_star_[i].allFinite() || !velocity_star_[i].allFinite()) {
-      throw StabilityError(step_ + 1, i, "velocity", "not finite after the explicit step");
+      throw StabilityError(step_ + 1, id, "velocity", "not finite after the explicit step");
     }
   }
 }
@@ -193,29 +161,35 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
   const MpsParameters& p = parameters_;
   const int n = c.n;
   update_neighbours(position_star_, report);
-  const NeighbourList& list = neighbours_;
+  const bool masked = !p.partitions.empty();
+  if (masked) find_near_pairs(position_star_, c.collision_distance);
   fill(correction_, n, kZero);
   fill(wall_correction_, n, kZero);
   fill(collided_, n, 0);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (!is_fluid(kinds_[i])) continue;
-    for (int k = list.begin(i); k < list.end(i); ++k) {
-      const double r = list.distance[k];
-      if (r >= c.collision_distance || r <= 0.0) continue;
-      const int j = list.index[k];
+    if (!is_fluid(kind_[i])) continue;
+    auto pair = [&](int j, double r) {
+      if (r >= c.collision_distance || r <= 0.0) return;
       const Eigen::Vector3d normal = p.periodic.wrap(position_star_[j] - position_star_[i]) / r;
       const double approach = (velocity_star_[j] - velocity_star_[i]).dot(normal);
-      if (approach >= 0.0) continue;
-      const double share = is_fluid(kinds_[j]) ? 0.5 : 1.0;
+      if (approach >= 0.0) return;
+      const double share = is_fluid(kind_[j]) ? 0.5 : 1.0;
       const Eigen::Vector3d change = (1.0 + p.collision_restitution) * share * approach * normal;
       correction_[i] += change;
-      if (!is_fluid(kinds_[j])) wall_correction_[i] += change;
+      if (!is_fluid(kind_[j])) wall_correction_[i] += change;
       ++collided_[i];
+    };
+    if (masked) {
+      for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
+        pair(near_.index[k], near_.distance[k]);
+      }
+    } else {
+      visit_partners(neighbours_, position_star_, p.periodic, i, c.collision_distance, pair);
     }
   }
-  collisions_refreshed_ = true;
-  for (int i = 0; i < n; ++i) {
+  for (int id = 0; id < n; ++id) {
+    const int i = rank_[id];
     if (collided_[i] == 0) continue;
     velocity_star_[i] += correction_[i];
     position_star_[i] += c.dt * correction_[i];
@@ -227,38 +201,47 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
 
 // 3. Number density at r* (seed 001 eq. (7)), velocity divergence at r* with the density radius,
 // and the unknowns: fluid and wall particles off the free surface (n* >= beta n0); dummy
-// particles carry no pressure.
+// particles carry no pressure. The pairs within the stage radii at r* (near_) serve the rest of
+// the step.
 void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   const MpsParameters& p = parameters_;
   const int n = c.n;
-  // After the collision stage only the particles it moved need new distances.
-  update_neighbours(position_star_, report, collisions_refreshed_ ? &collided_ : nullptr);
-  collisions_refreshed_ = false;
-  update_solid_fractions(position_star_);
-  const NeighbourList& list = neighbours_;
-  fill(number_densities_, n, 0.0);
+  update_neighbours(position_star_, report);
+  const double cutoff = std::max({c.re_n, c.re_g, c.re_l});
+  // Without partitions each row is found and summed in one go, while it is in cache.
+  const bool fused = p.partitions.empty();
+  if (!fused) find_near_pairs(position_star_, cutoff);
+  near_.radius = cutoff;
+  const double cutoff2 = near_cutoff2(cutoff);
+  update_phi();
+  const NeighbourList& list = near_;
+  const bool mixed = p.source_term == MpsParameters::SourceTerm::mixed;
+  fill(density_star_, n, 0.0);
   fill(divergence_, n, 0.0);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
+    if (fused) find_near_row(i, position_star_, cutoff2, false);
     double sum = 0.0, divergence_sum = 0.0;
-    for (int k = list.begin(i); k < list.end(i); ++k) {
+    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
       const double r = list.distance[k];
       if (r >= c.re_n) continue;
-      const int j = list.index[k];
       sum += weight(r, c.re_n);
+      if (!mixed) continue;  // the divergence only enters the mixed source term
+      const int j = list.index[k];
       divergence_sum +=
           divergence_pair_term(velocity_star_[j] - velocity_star_[i],
                                p.periodic.wrap(position_star_[j] - position_star_[i]), r, c.re_n);
     }
-    number_densities_[i] = sum;
+    density_star_[i] = sum;
     divergence_[i] = gradient_factor(c.d, c.n0_n) * divergence_sum;
   }
   fill(unknown_, n, -1);
   unknown_particle_.clear();
-  for (int i = 0; i < n; ++i) {
-    if (kinds_[i] == ParticleKind::dummy || is_inactive(kinds_[i])) continue;
+  for (int id = 0; id < n; ++id) {  // unknowns numbered in particle order
+    const int i = rank_[id];
+    if (kind_[i] == ParticleKind::dummy || is_inactive(kind_[i])) continue;
     // Where solids take a share phi of the space, the fluid's full density is (1 - phi) n0.
-    if (number_densities_[i] < p.surface_threshold * c.n0_n * (1.0 - solid_fraction_[i])) {
+    if (density_star_[i] < p.surface_threshold * c.n0_n * (1.0 - phi_[i])) {
       ++report.surface_particles;
       continue;
     }
@@ -266,6 +249,21 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
     unknown_particle_.push_back(i);
   }
   report.pressure_unknowns = static_cast<int>(unknown_particle_.size());
+}
+
+// phi at r* (solid_volume.cpp works in particle order), then in the internal order.
+void FluidSystem::update_phi() {
+  const int n = particle_count();
+  if (solid_points_.empty()) {
+    update_solid_fractions(positions_);  // zeros; the positions are not read
+    fill(phi_, static_cast<std::size_t>(n), 0.0);
+    return;
+  }
+  scratch_.resize(n);
+  for (int k = 0; k < n; ++k) scratch_[order_[k]] = position_star_[k];
+  update_solid_fractions(scratch_);
+  phi_.resize(n);
+  for (int k = 0; k < n; ++k) phi_[k] = solid_fraction_[order_[k]];
 }
 
 // 4. Pressure Poisson equation with the Laplacian model (seed 001 eq. (9)):
@@ -287,12 +285,12 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
     // Target (1 - phi_i) n0 (set_solid_volumes); the row keeps the n0 scaling so the matrix
     // stays symmetric. The divergence part has no d phi / dt term: with solids, the density
     // error is what pushes the displaced water away.
-    const double target = c.n0_n * (1.0 - solid_fraction_[i]);
+    const double target = c.n0_n * (1.0 - phi_[i]);
     rhs_[row] = p.source_term == MpsParameters::SourceTerm::density
-                    ? scale * p.pressure_relaxation * (number_densities_[i] - target) / c.n0_n
+                    ? scale * p.pressure_relaxation * (density_star_[i] - target) / c.n0_n
                     : scale * (p.pressure_relaxation * (density_now_[i] - target) / c.n0_n -
                                c.dt * divergence_[i]);
-    solution_[row] = pressures_[i];  // warm start from the previous step
+    solution_[row] = p_[i];  // warm start from the previous step
   }
   if (pressure_solver_.uses_amg(m)) {
     // The multigrid hierarchy comes from the same equation with the short radius: a quarter of
@@ -311,14 +309,14 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
 // out.
 void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift,
                                           SparseRows& matrix) {
-  const NeighbourList& list = neighbours_;
+  const NeighbourList& list = near_;
   const int m = static_cast<int>(unknown_particle_.size());
   fill(row_length_, static_cast<std::size_t>(m) + 1, std::int64_t{0});
 #pragma omp parallel for schedule(static) if (m >= 4096)
   for (int row = 0; row < m; ++row) {
     const int i = unknown_particle_[row];
     std::int64_t count = 1;
-    for (int k = list.begin(i); k < list.end(i); ++k) {
+    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
       if (unknown_[list.index[k]] >= 0 && list.distance[k] < radius) ++count;
     }
     row_length_[row + 1] = count;
@@ -333,9 +331,9 @@ void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift,
     std::int64_t slot = matrix.offset[row];
     const std::int64_t diagonal_slot = slot++;
     double diagonal = diagonal_shift;
-    for (int k = list.begin(i); k < list.end(i); ++k) {
+    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
       const int j = list.index[k];
-      if (kinds_[j] == ParticleKind::dummy) continue;
+      if (kind_[j] == ParticleKind::dummy) continue;
       const double w = weight(list.distance[k], radius);
       if (w <= 0.0) continue;
       diagonal += w;
@@ -376,45 +374,38 @@ void FluidSystem::solve_pressure(StepReport& report) {
 // r^{n+1} = r* + dt u'.
 void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepReport& report) {
   const MpsParameters& p = parameters_;
-  const NeighbourList& list = neighbours_;
+  const NeighbourList& list = near_;
   const int n = c.n;
   const double factor = c.dt / p.density * gradient_factor(c.d, c.n0_g);
   const bool symmetric = p.gradient_form == MpsParameters::GradientForm::symmetric;
   fill(pressure_change_, n, kZero);
   fill(wall_pressure_change_, n, kZero);
-  fill(minimum_, n, 0.0);  // p^_i
-  if (!symmetric) {
 #pragma omp parallel for schedule(static) if (n >= 4096)
-    for (int i = 0; i < n; ++i) {
-      if (!is_fluid(kinds_[i])) continue;
-      double smallest = pressure_[i];
-      for (int k = list.begin(i); k < list.end(i); ++k) {
+  for (int i = 0; i < n; ++i) {
+    if (!is_fluid(kind_[i])) continue;
+    double smallest = pressure_[i];  // p^_i, over the same partners as the gradient
+    if (!symmetric) {
+      for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
         const int j = list.index[k];
-        if (kinds_[j] != ParticleKind::dummy && list.distance[k] < c.re_g) {
+        if (kind_[j] != ParticleKind::dummy && list.distance[k] < c.re_g) {
           smallest = std::min(smallest, pressure_[j]);
         }
       }
-      minimum_[i] = smallest;
     }
-  }
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    if (!is_fluid(kinds_[i])) continue;
     Eigen::Vector3d gradient = Eigen::Vector3d::Zero(), wall_gradient = Eigen::Vector3d::Zero();
-    for (int k = list.begin(i); k < list.end(i); ++k) {
+    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
       const int j = list.index[k];
       const double r = list.distance[k];
-      if (kinds_[j] == ParticleKind::dummy || r >= c.re_g) continue;
-      const double difference =
-          symmetric ? pressure_[i] + pressure_[j] : pressure_[j] - minimum_[i];
+      if (kind_[j] == ParticleKind::dummy || r >= c.re_g) continue;
+      const double difference = symmetric ? pressure_[i] + pressure_[j] : pressure_[j] - smallest;
       const Eigen::Vector3d term = gradient_pair_term(
           difference, r, c.re_g, p.periodic.wrap(position_star_[j] - position_star_[i]));
       gradient += term;
-      if (!is_fluid(kinds_[j])) wall_gradient += term;
+      if (!is_fluid(kind_[j])) wall_gradient += term;
     }
     // Applied below: the loop still reads the partners' r*. Among solids the neighbourhood is
     // (1 - phi) full, so the sum is normalised by (1 - phi) n0.
-    const double local_factor = factor / (1.0 - solid_fraction_[i]);
+    const double local_factor = factor / (1.0 - phi_[i]);
     pressure_change_[i] = -local_factor * gradient;
     wall_pressure_change_[i] = -local_factor * wall_gradient;
   }
@@ -423,7 +414,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     velocity_star_[i] += pressure_change_[i];
     position_star_[i] += c.dt * pressure_change_[i];
   }
-  for (int i = 0; i < n; ++i) {  // serial sums: the same result with any thread count
+  for (int id = 0; id < n; ++id) {  // serial sums in particle order: the same bits always
+    const int i = rank_[id];
     report.pressure_impulse += particle_mass_ * pressure_change_[i];
     report.wall_pressure_impulse += particle_mass_ * wall_pressure_change_[i];
   }
@@ -433,9 +425,7 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
 // fig. 2.4 (2)). The point forces stay for the next step of the same window (set_point_forces).
 void FluidSystem::finish_step(const StepConstants& c, StepReport& report) {
   const int n = c.n;
-  std::swap(positions_, position_star_);
-  std::swap(velocities_, velocity_star_);
-  std::swap(pressures_, pressure_);
+  scatter_state();
   if (parameters_.periodic.enabled) {
     for (int i = 0; i < n; ++i) positions_[i] = parameters_.periodic.fold(positions_[i]);
   }

@@ -97,8 +97,18 @@ void FluidSystem::initialise() {
       break;
   }
   StepReport unused;
-  update_neighbours(positions_, unused);
-  number_densities_ = number_density(positions_, neighbours_, p.radius_density_over_l0 * l0);
+  gather_state();
+  update_neighbours(x_, unused, true);
+  const double re = p.radius_density_over_l0 * l0;
+  find_near_pairs(x_, re);
+  number_densities_.assign(n, 0.0);
+  for (std::size_t k = 0; k < n; ++k) {
+    double sum = 0.0;
+    for (std::int64_t pair = near_.offset[k]; pair < near_end_[k]; ++pair) {
+      sum += weight(near_.distance[pair], re);
+    }
+    number_densities_[order_[k]] = sum;
+  }
 }
 
 double FluidSystem::hierarchy_radius() const {

@@ -213,3 +213,123 @@ void NeighbourGrid::query(const std::vector<Eigen::Vector3d>& positions,
 }
 
 }  // namespace cosim::mps
+
+namespace cosim::mps {
+
+void NeighbourGrid::search_block(const Eigen::Array3i& cell, std::vector<int>& xs,
+                                 Eigen::Array3i& low, Eigen::Array3i& high) const {
+  const int drop = drop_cells();
+  low = (cell - 1).max(0);
+  high = (cell + 1).min(cells_ - 1);
+  low.y() = std::max(0, low.y() - drop);
+  high.y() = std::min(cells_.y() - 1, high.y() + drop);
+  x_range(cell.x(), 1, xs);
+}
+
+void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
+                                      const std::vector<int>& key, NeighbourList& list) const {
+  if (radius > cell_size_ * (1.0 + 1e-12)) {
+    throw std::invalid_argument("NeighbourGrid::neighbours_by_key: radius exceeds the cell size");
+  }
+  const int n = static_cast<int>(positions.size());
+  const std::int64_t cell_count = static_cast<std::int64_t>(cell_start_.size()) - 1;
+  const double radius2 = radius * radius;
+  list.radius = radius;
+  list.offset.assign(static_cast<std::size_t>(n) + 1, 0);
+  list.distance.clear();
+  // Each thread takes a contiguous run of cells holding about 1/threads of the particles and
+  // collects its pairs in its own buffer; segment[i] is where particle i's partners start there.
+  const int threads = n >= 4096 ? omp_get_max_threads() : 1;
+  std::vector<std::vector<int>> block_index(threads);
+  std::vector<std::int64_t> segment(n, 0);
+  std::vector<int> owner(n, 0);
+  const std::int64_t listed = static_cast<std::int64_t>(sorted_.size());
+#pragma omp parallel num_threads(threads) if (n >= 4096)
+  {
+    const int thread = omp_get_thread_num(), count = omp_get_num_threads();
+    const auto first_cell = [&](int t) {
+      const std::int64_t particle = listed * t / count;
+      return static_cast<std::int64_t>(
+          std::lower_bound(cell_start_.begin(), cell_start_.end() - 1, particle) -
+          cell_start_.begin());
+    };
+    const std::int64_t c_begin = first_cell(thread);
+    const std::int64_t c_end = thread + 1 == count ? cell_count : first_cell(thread + 1);
+    std::vector<int>& index = block_index[thread];
+    std::vector<std::uint64_t> candidate;  // key << 32 | particle, sorted
+    std::vector<double> cx, cy, cz;        // their positions, in that order
+    std::vector<int> cj;                   // and indices
+    std::vector<double> distance2;
+    std::vector<int> xs;
+    for (std::int64_t c = c_begin; c < c_end; ++c) {
+      if (cell_start_[c] == cell_start_[c + 1]) continue;
+      const Eigen::Array3i cell(
+          static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
+          static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
+      Eigen::Array3i low, high;
+      search_block(cell, xs, low, high);
+      candidate.clear();
+      visit_cells(xs, low, high, [&](int j) {
+        candidate.push_back(static_cast<std::uint64_t>(key[j]) << 32 |
+                            static_cast<std::uint32_t>(j));
+      });
+      std::sort(candidate.begin(), candidate.end());
+      const std::size_t count = candidate.size();
+      cx.resize(count);
+      cy.resize(count);
+      cz.resize(count);
+      cj.resize(count);
+      distance2.resize(count);
+      for (std::size_t k = 0; k < count; ++k) {
+        cj[k] = static_cast<int>(static_cast<std::uint32_t>(candidate[k]));
+        const Eigen::Vector3d& x = positions[cj[k]];
+        cx[k] = x.x();
+        cy[k] = x.y();
+        cz[k] = x.z();
+      }
+      for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
+        const int i = sorted_[s];
+        const Eigen::Vector3d xi = positions[i];
+        const std::size_t at = index.size();
+        segment[i] = static_cast<std::int64_t>(at);
+        owner[i] = thread;
+        index.resize(at + count);
+        int* out = index.data() + at;
+        std::size_t found = 0;
+        if (!periodic_.enabled) {
+          // Branch-free: every candidate is written, the slot kept only if in reach. The sum of
+          // squares in the order of Eigen's squaredNorm, so the pairs are those of neighbours().
+          const double x0 = xi.x(), y0 = xi.y(), z0 = xi.z();
+          double* d2 = distance2.data();
+#pragma omp simd
+          for (std::size_t k = 0; k < count; ++k) {
+            const double dx = cx[k] - x0, dy = cy[k] - y0, dz = cz[k] - z0;
+            d2[k] = (dx * dx + dy * dy) + dz * dz;
+          }
+          for (std::size_t k = 0; k < count; ++k) {
+            out[found] = cj[k];
+            found += static_cast<std::size_t>((d2[k] < radius2) & (cj[k] != i));
+          }
+        } else {
+          for (std::size_t k = 0; k < count; ++k) {
+            const Eigen::Vector3d d(cx[k] - xi.x(), cy[k] - xi.y(), cz[k] - xi.z());
+            if (cj[k] != i && periodic_.wrap(d).squaredNorm() < radius2) out[found++] = cj[k];
+          }
+        }
+        index.resize(at + found);
+        list.offset[i + 1] = static_cast<std::int64_t>(found);
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i) list.offset[i + 1] += list.offset[i];
+  list.index.resize(list.offset[n]);
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    const std::int64_t length = list.offset[i + 1] - list.offset[i];
+    if (length == 0) continue;
+    const auto from = block_index[owner[i]].begin() + segment[i];
+    std::copy(from, from + length, list.index.begin() + list.offset[i]);
+  }
+}
+
+}  // namespace cosim::mps

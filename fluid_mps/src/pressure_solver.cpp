@@ -13,10 +13,11 @@ namespace {
 constexpr int kBlock = 1024;
 
 // Deterministic parallel dot product: per-block partial sums, then a serial sum of the blocks.
-double dot(const std::vector<double>& a, const std::vector<double>& b) {
+double dot(const std::vector<double>& a, const std::vector<double>& b,
+           std::vector<double>& partial) {
   const int n = static_cast<int>(a.size());
   const int blocks = (n + kBlock - 1) / kBlock;
-  std::vector<double> partial(blocks, 0.0);
+  partial.assign(blocks, 0.0);
 #pragma omp parallel for schedule(static) if (blocks >= 4)
   for (int block = 0; block < blocks; ++block) {
     const int end = std::min(n, (block + 1) * kBlock);
@@ -69,16 +70,82 @@ PcgResult solve_incomplete_cholesky(const SparseRows& matrix, const std::vector<
   return result;
 }
 
-// Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r.
+// The Krylov loop below fuses the vector passes of one iteration into three parallel loops over
+// the blocks of dot(): each block's partial sums are accumulated in item order and the blocks
+// are summed in order, exactly as dot() does, so the bits are those of the plain loop.
+int block_count(int n) {
+  return (n + kBlock - 1) / kBlock;
+}
+
+// q = A p; returns p . q.
+double multiply_dot(const SparseRows& m, const std::vector<double>& p, std::vector<double>& q,
+                    std::vector<double>& partial) {
+  const int n = m.rows(), blocks = block_count(n);
+  partial.resize(blocks);
+#pragma omp parallel for schedule(static) if (blocks >= 4)
+  for (int block = 0; block < blocks; ++block) {
+    const int end = std::min(n, (block + 1) * kBlock);
+    double pq = 0.0;
+    for (int i = block * kBlock; i < end; ++i) {
+      double sum = 0.0;
+      for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+        sum += m.value[k] * p[m.column[k]];
+      }
+      q[i] = sum;
+      pq += p[i] * q[i];
+    }
+    partial[block] = pq;
+  }
+  double total = 0.0;
+  for (int block = 0; block < blocks; ++block) total += partial[block];
+  return total;
+}
+
+// x += alpha p, r -= alpha q; with `inverse_diagonal` also z = D^-1 r (Jacobi). Returns r . r
+// and, with the diagonal, r . z in `rz`.
+double update_residual(double alpha, const std::vector<double>& p, const std::vector<double>& q,
+                       std::vector<double>& x, std::vector<double>& r, std::vector<double>& z,
+                       const std::vector<double>* inverse_diagonal, std::vector<double>& partial,
+                       double& rz) {
+  const int n = static_cast<int>(r.size()), blocks = block_count(n);
+  partial.resize(2 * static_cast<std::size_t>(blocks));
+  if (inverse_diagonal) z.resize(n);
+#pragma omp parallel for schedule(static) if (blocks >= 4)
+  for (int block = 0; block < blocks; ++block) {
+    const int end = std::min(n, (block + 1) * kBlock);
+    double rr_sum = 0.0, rz_sum = 0.0;
+    for (int i = block * kBlock; i < end; ++i) {
+      x[i] += alpha * p[i];
+      r[i] -= alpha * q[i];
+      if (inverse_diagonal) {
+        z[i] = (*inverse_diagonal)[i] * r[i];
+        rz_sum += r[i] * z[i];
+      }
+      rr_sum += r[i] * r[i];
+    }
+    partial[2 * block] = rr_sum;
+    partial[2 * block + 1] = rz_sum;
+  }
+  double rr = 0.0;
+  rz = 0.0;
+  for (int block = 0; block < blocks; ++block) {
+    rr += partial[2 * block];
+    rz += partial[2 * block + 1];
+  }
+  return rr;
+}
+
+// Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r,
+// or with `inverse_diagonal` the Jacobi step is fused into the residual update.
 template <class Precondition>
 PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double>& rhs,
                               std::vector<double>& x, double tolerance, int max_iterations,
-                              std::vector<double>& r, std::vector<double>& z,
-                              std::vector<double>& p, std::vector<double>& q,
+                              CgWork& work, const std::vector<double>* inverse_diagonal,
                               Precondition&& precondition) {
   const int n = matrix.rows();
+  std::vector<double>&r = work.r, &z = work.z, &p = work.p, &q = work.q;
   PcgResult result;
-  const double rhs_norm = std::sqrt(dot(rhs, rhs));
+  const double rhs_norm = std::sqrt(dot(rhs, rhs, work.partial));
   if (rhs_norm == 0.0) {
     std::fill(x.begin(), x.end(), 0.0);
     result.converged = true;
@@ -93,26 +160,25 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
   precondition(r, z);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) p[i] = z[i];
-  double rz = dot(r, z);
-  double residual = std::sqrt(dot(r, r)) / rhs_norm;
+  double rz = dot(r, z, work.partial);
+  double residual = std::sqrt(dot(r, r, work.partial)) / rhs_norm;
   int iteration = 0;
   while (residual > tolerance && iteration < max_iterations) {
-    multiply(matrix, p, q);
-    const double pq = dot(p, q);
+    const double pq = multiply_dot(matrix, p, q, work.partial);
     if (!(pq > 0.0)) break;  // loss of positive definiteness or breakdown
     const double alpha = rz / pq;
-#pragma omp parallel for schedule(static) if (n >= 4096)
-    for (int i = 0; i < n; ++i) {
-      x[i] += alpha * p[i];
-      r[i] -= alpha * q[i];
+    double rz_next = 0.0;
+    const double rr =
+        update_residual(alpha, p, q, x, r, z, inverse_diagonal, work.partial, rz_next);
+    if (!inverse_diagonal) {
+      precondition(r, z);
+      rz_next = dot(r, z, work.partial);
     }
-    precondition(r, z);
-    const double rz_next = dot(r, z);
     const double beta = rz_next / rz;
     rz = rz_next;
 #pragma omp parallel for schedule(static) if (n >= 4096)
     for (int i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
-    residual = std::sqrt(dot(r, r)) / rhs_norm;
+    residual = std::sqrt(rr) / rhs_norm;
     ++iteration;
   }
   result.iterations = iteration;
@@ -150,7 +216,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
     if (!amg_) amg_ = std::make_unique<Amg>();
     amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
     return conjugate_gradients(
-        matrix, rhs, x, tolerance, max_iterations, r_, z_, p_, q_,
+        matrix, rhs, x, tolerance, max_iterations, work_, nullptr,
         [&](const std::vector<double>& r, std::vector<double>& z) { amg_->cycle.apply(r, z); });
   }
   inverse_diagonal_.assign(n, 1.0);
@@ -162,7 +228,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
     }
   }
   const std::vector<double>& inverse_diagonal = inverse_diagonal_;
-  return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, r_, z_, p_, q_,
+  return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, &inverse_diagonal,
                              [&](const std::vector<double>& r, std::vector<double>& z) {
                                const int size = static_cast<int>(r.size());
                                z.resize(size);

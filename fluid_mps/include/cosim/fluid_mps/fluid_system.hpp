@@ -166,12 +166,27 @@ class FluidSystem {
   double hierarchy_radius() const;
   void correct_with_pressure_gradient(const StepConstants& c, StepReport& report);
   void finish_step(const StepConstants& c, StepReport& report);
-  // Makes the pair list valid at `x` (rebuilt if a particle moved half the skin since the last
-  // search, or the particle kinds changed) and sets its distances to those at `x`.
-  // With `moved`, the distances are already those at x except for pairs with a particle
-  // i where moved[i] != 0 (the collision stage moves few particles): only those are refreshed.
+  // Makes the pair list valid at `x` (internal order): searched again if a particle has moved
+  // half the skin since the last search or the particle kinds changed. With `reorder` (only at
+  // the start of a step, before any stage has written its arrays) a new search also puts the
+  // particles in cell order and gathers the state again in that order (fluid_pairs.cpp).
   void update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report,
-                         const std::vector<int>* moved = nullptr);
+                         bool reorder = false);
+  // near_: the pairs of the list closer than `cutoff` at `x`, with their distances, each
+  // particle's in [near_.offset[i], near_end_[i]); pairs cut by a thin partition at `x` get an
+  // infinite distance.
+  void find_near_pairs(const std::vector<Eigen::Vector3d>& x, double cutoff);
+  // Row i of find_near_pairs (r^2 <= cutoff2); with `tail` the rest of the row is filled with
+  // the particle itself at infinity, so that the partition mask can walk whole rows.
+  void find_near_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2, bool tail);
+  // (1 + 1e-12) cutoff^2: pairs are dropped on r^2 with a margin well above rounding; the stages
+  // compare the distance itself with their radii.
+  static double near_cutoff2(double cutoff) { return cutoff * cutoff * (1.0 + 1e-12); }
+  // The public arrays (particle order) into the internal ones (order_), and back.
+  void gather_state();
+  void scatter_state();
+  // phi_ (internal order) at r* from update_solid_fractions.
+  void update_phi();
   // phi_i at `x` from the solid volumes (solid_volume.cpp); zeros without them.
   void update_solid_fractions(const std::vector<Eigen::Vector3d>& x);
 
@@ -191,20 +206,32 @@ class FluidSystem {
   LatticeSums density_sums_, gradient_sums_, laplacian_sums_;
   Eigen::AlignedBox3d domain_box_;  // escape box: domain, z extent of 2D runs made non-empty
 
+  // The stages work on particles in an internal order along the cells of the last search
+  // (memory locality): order_[k] is the particle at place k, rank_[i] the place of particle i.
+  // The public arrays above stay in particle order. Every sum over partners runs in particle
+  // order and every reduction over particles too, so no result depends on the internal order or
+  // on when it changed: a restarted run (which starts from particle order) and runs on any
+  // number of threads give the same bits.
+  std::vector<int> order_, rank_;
+  std::vector<Eigen::Vector3d> x_, u_, acceleration_;  // r^n, u^n, point forces / m
+  std::vector<double> p_, phi_, density_star_;         // p^n, solid fraction, n* (internal)
+  std::vector<ParticleKind> kind_;
+
   // Pair list of every operator: all pairs within the largest radius plus the skin at the
-  // positions of the last search, each particle's partners in ascending index order. Operators
-  // skip pairs beyond their own radius, so the sums do not depend on when the list was built
-  // (a restarted run gives the same bits).
+  // positions of the last search, each particle's partners in ascending particle order.
+  // Operators skip pairs beyond their own radius, so the sums do not depend on when the list
+  // was built (a restarted run gives the same bits).
   NeighbourList neighbours_;
-  std::vector<Eigen::Vector3d> search_positions_;
+  NeighbourList near_;  // find_near_pairs: same offsets as neighbours_
+  std::vector<std::int64_t> near_end_;
+  std::vector<Eigen::Vector3d> search_positions_, scratch_;
   std::vector<char> include_;
   bool neighbours_valid_ = false;
-  bool collisions_refreshed_ = false;  // distances are at r* before the collision corrections
   PressureSolver pressure_solver_;
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
   std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,
       wall_correction_, pressure_change_, wall_pressure_change_;
-  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_;
+  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_;
   std::vector<int> collided_, unknown_, unknown_particle_;
   std::vector<std::int64_t> row_length_;
   SparseRows matrix_, hierarchy_matrix_;

@@ -47,6 +47,18 @@ class NeighbourGrid {
   // All pairs j != i with |r_j - r_i| < radius (radius <= cell size). Parallel and deterministic.
   NeighbourList neighbours(const std::vector<Eigen::Vector3d>& positions, double radius) const;
 
+  // The same pairs, each particle's partners in ascending key[j] (keys distinct, e.g. the
+  // particle ids of particles stored in another order), written into `list` (its storage is
+  // reused) without distances. Built cell by cell: the particles of the 3^D cells around a cell
+  // are gathered once, sorted by key and tested against each particle of the cell, so no
+  // per-particle sort is needed. Parallel; the same list whatever the thread count.
+  void neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
+                         const std::vector<int>& key, NeighbourList& list) const;
+
+  // Included particles cell by cell (cells in memory order, z slowest), each cell's in index
+  // order: an order along the cells for memory locality.
+  const std::vector<int>& cell_order() const { return sorted_; }
+
   // Particles within `radius` of an arbitrary point (radius may exceed the cell size).
   void query(const std::vector<Eigen::Vector3d>& positions, const Eigen::Vector3d& point,
              double radius, std::vector<int>& found) const;
@@ -63,6 +75,9 @@ class NeighbourGrid {
   template <class Visit>
   void visit_cells(const std::vector<int>& xs, const Eigen::Array3i& low,
                    const Eigen::Array3i& high, Visit&& visit) const;
+  // Cells searched around `cell` (the 3^D block, extended in y across a seam with a drop).
+  void search_block(const Eigen::Array3i& cell, std::vector<int>& xs, Eigen::Array3i& low,
+                    Eigen::Array3i& high) const;
   // x cells within `reach` of cell x, wrapped when periodic, each once, in ascending order.
   void x_range(int x, int reach, std::vector<int>& xs) const;
   // Extra y cells to search: across a seam with a drop, neighbours are stored up to `drop`

@@ -49,6 +49,12 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
                     std::vector<double>& x, double tolerance, int max_iterations,
                     Preconditioner preconditioner = Preconditioner::jacobi);
 
+// Work vectors of the conjugate gradients (residual, preconditioned residual, direction,
+// product, per-block partial sums).
+struct CgWork {
+  std::vector<double> r, z, p, q, partial;
+};
+
 // A pressure solver that keeps its work arrays (and the AMG library objects) between solves, so
 // a time step allocates nothing once the particle count has settled.
 class PressureSolver {
@@ -77,7 +83,8 @@ class PressureSolver {
   Preconditioner preconditioner_;
   int amg_from_unknowns_;
   std::unique_ptr<Amg> amg_;
-  std::vector<double> r_, z_, p_, q_, inverse_diagonal_;
+  CgWork work_;
+  std::vector<double> inverse_diagonal_;
 };
 
 }  // namespace cosim::mps

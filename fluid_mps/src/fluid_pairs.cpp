@@ -1,0 +1,144 @@
+// The pair list of the fluid step and the internal particle order: one search kept over steps
+// with a skin, particles reordered along its cells for memory locality, and the pairs within
+// the stage radii at the current positions.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "cosim/fluid_mps/boundaries.hpp"
+#include "cosim/fluid_mps/fluid_system.hpp"
+
+// Loops run in parallel from 4096 items on: under that the OpenMP fork/join costs more than the
+// work, and oversubscribed CI cores make it far worse.
+namespace cosim::mps {
+
+void FluidSystem::gather_state() {
+  const int n = particle_count();
+  if (static_cast<int>(order_.size()) != n) {
+    order_.resize(n);
+    rank_.resize(n);
+    for (int i = 0; i < n; ++i) order_[i] = rank_[i] = i;
+  }
+  x_.resize(n);
+  u_.resize(n);
+  acceleration_.resize(n);
+  p_.resize(n);
+  kind_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int k = 0; k < n; ++k) {
+    const int i = order_[k];
+    x_[k] = positions_[i];
+    u_[k] = velocities_[i];
+    acceleration_[k] = external_accelerations_[i];
+    p_[k] = pressures_[i];
+    kind_[k] = kinds_[i];
+  }
+}
+
+// r*, u*, p and n* of the step become the public state; positions and velocities of inactive
+// particles are carried through unchanged by the stages.
+void FluidSystem::scatter_state() {
+  const int n = particle_count();
+  number_densities_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int k = 0; k < n; ++k) {
+    const int i = order_[k];
+    positions_[i] = position_star_[k];
+    velocities_[i] = velocity_star_[k];
+    pressures_[i] = pressure_[k];
+    number_densities_[i] = density_star_[k];
+  }
+}
+
+void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepReport& report,
+                                    bool reorder) {
+  const MpsParameters& p = parameters_;
+  const int n = particle_count();
+  const double skin = kSkinOverL0 * p.particle_spacing;
+  // Two particles that each moved less than half the skin are still listed if now in reach.
+  if (neighbours_valid_ && static_cast<int>(search_positions_.size()) == n) {
+    double largest_move2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : largest_move2) if (n >= 4096)
+    for (int k = 0; k < n; ++k) {
+      if (is_inactive(kind_[k])) continue;
+      largest_move2 =
+          std::max(largest_move2, p.periodic.wrap(x[k] - search_positions_[k]).squaredNorm());
+    }
+    if (4.0 * largest_move2 < skin * skin) return;
+  }
+  const double list_radius = largest_influence_radius(p) + skin;
+  const bool any_inactive = std::any_of(kind_.begin(), kind_.end(), is_inactive);
+  auto grid_at = [&](const std::vector<Eigen::Vector3d>& at) {
+    include_.clear();
+    scratch_.clear();
+    if (any_inactive) {
+      include_.resize(n);
+      for (int k = 0; k < n; ++k) {
+        include_[k] = is_inactive(kind_[k]) ? 0 : 1;
+        if (include_[k]) scratch_.push_back(at[k]);
+      }
+    }
+    NeighbourGrid grid(p.dimension,
+                       bounding_box(any_inactive ? scratch_ : at, p.dimension, list_radius),
+                       list_radius, p.periodic);
+    grid.build(at, any_inactive ? &include_ : nullptr);
+    return grid;
+  };
+  NeighbourGrid grid = grid_at(x);
+  if (reorder) {
+    // Cell order, the inactive particles (out of every cell) last.
+    std::vector<int> order;
+    order.reserve(n);
+    for (const int k : grid.cell_order()) order.push_back(order_[k]);
+    for (int k = 0; k < n; ++k) {
+      if (any_inactive && !include_[k]) order.push_back(order_[k]);
+    }
+    order_ = std::move(order);
+    for (int k = 0; k < n; ++k) rank_[order_[k]] = k;
+    gather_state();  // x is x_, now in the new order
+    grid = grid_at(x);
+  }
+  grid.neighbours_by_key(x, list_radius, order_, neighbours_);
+  near_.offset = neighbours_.offset;
+  near_.index.resize(neighbours_.pair_count());
+  near_.distance.resize(neighbours_.pair_count());
+  near_end_.resize(static_cast<std::size_t>(n));
+  search_positions_ = x;
+  neighbours_valid_ = true;
+  ++report.neighbour_searches;
+}
+
+void FluidSystem::find_near_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2,
+                                bool tail) {
+  const PeriodicBoundary& periodic = parameters_.periodic;
+  const Eigen::Vector3d xi = x[i];
+  std::int64_t slot = neighbours_.offset[i];
+  for (std::int64_t k = neighbours_.offset[i]; k < neighbours_.offset[i + 1]; ++k) {
+    const int j = neighbours_.index[k];
+    const double r2 = periodic.wrap(x[j] - xi).squaredNorm();
+    if (r2 > cutoff2) continue;
+    near_.index[slot] = j;
+    near_.distance[slot] = std::sqrt(r2);
+    ++slot;
+  }
+  near_end_[i] = slot;
+  if (!tail) return;
+  for (; slot < neighbours_.offset[i + 1]; ++slot) {
+    near_.index[slot] = i;
+    near_.distance[slot] = std::numeric_limits<double>::infinity();
+  }
+}
+
+void FluidSystem::find_near_pairs(const std::vector<Eigen::Vector3d>& x, double cutoff) {
+  const MpsParameters& p = parameters_;
+  const int n = particle_count();
+  const bool masked = !p.partitions.empty();
+  const double cutoff2 = near_cutoff2(cutoff);
+  near_.radius = cutoff;
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) find_near_row(i, x, cutoff2, masked);
+  // Thin partitions (seed 001 section 2.2(1)) cut pairs at x: infinite distance.
+  mask_partition_crossings(near_, x, p.partitions, p.periodic, &kind_);
+}
+
+}  // namespace cosim::mps
