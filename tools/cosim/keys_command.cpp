@@ -55,6 +55,13 @@ std::vector<Group> vegetation_groups() {
                                   "plants[]."),
       group<vegetation::CanopySettings>("Canopy measures (seed 000 section 4)", section_keys,
                                         "canopy.")};
+  Group checks = group<vegetation::PointLoadSettings>(
+      "Beam checks (references/cantilever.md): loads and plucks per `plants` entry, a static "
+      "start and modes for the section",
+      section_keys, "plants[].point_loads[].");
+  add_rows<vegetation::PluckSettings>(checks, "plants[].pluck.");
+  add_rows<vegetation::BeamChecks>(checks, "");
+  groups.push_back(std::move(checks));
   groups.push_back(
       group<vegetation::ElasticaReference>("The reference", section_keys, "reference."));
   return groups;
@@ -100,8 +107,7 @@ const std::vector<Participant>& participants() {
              "MpsParameters", "fluid_mps/include/cosim/fluid_mps/parameters.hpp", "")};
        }},
       {"vegetation_beam",
-       "The beam checks (`point_loads`, `pluck`, `static_solve`, `modes`) and `output_interval` "
-       "are read in `vegetation_beam/process/`.",
+       "`output_interval` is read in `vegetation_beam/process/vegetation_config.cpp`.",
        vegetation_groups},
       {"debris_dem", "`output_interval` is read in `debris_dem/process/dem_config.cpp`.",
        debris_groups},

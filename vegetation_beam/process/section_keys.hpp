@@ -11,6 +11,71 @@
 
 namespace cosim::vegetation {
 
+// Largest force (N) and tip speed (m/s) the check keys accept: far beyond any plant of seed 000
+// (honami reeds carry about 1 N of drag), and small enough to catch a unit slip.
+inline constexpr double kForceLimit = 1e6;
+inline constexpr double kSpeedLimit = 100.0;
+
+inline bool bounded(const Eigen::Vector3d& v, double limit) {
+  return v.allFinite() && v.norm() <= limit;
+}
+
+// A constant force on the node nearest `at` (references/cantilever.md: tip and point loads).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PointLoadSettings>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("at")
+        .in(Range{0.0, 1.0, true})
+        .needed()
+        .doc("fraction of the length from the base; the load goes to the nearest node"),
+    p.at);
+  v(Key("force").unit("N").needed().doc("world frame, for the whole run"), p.force);
+  v.rule("force", bounded(p.force, kForceLimit),
+         "must be finite with a magnitude of at most 1e+06 N");
+}
+
+// Released static deflection (tip_force) or a start in the velocity of linear mode `mode`.
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PluckSettings>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("tip_force").unit("N").doc("held in static equilibrium, released at t = 0"), p.tip_force);
+  v.rule("tip_force", bounded(p.tip_force, kForceLimit),
+         "must be finite with a magnitude of at most 1e+06 N");
+  v(Key("tip_velocity").unit("m/s").doc("the tip's start velocity, in the shape of mode `mode`"),
+    p.tip_velocity);
+  v.rule("tip_velocity", bounded(p.tip_velocity, kSpeedLimit),
+         "must be finite with a magnitude of at most 100 m/s");
+  const bool deflected = p.tip_force.norm() > 0, moving = p.tip_velocity.norm() > 0;
+  v.rule(deflected ? "tip_velocity" : "tip_force", deflected != moving,
+         "give one of tip_force (a released deflection) or tip_velocity (a start in the velocity "
+         "of linear mode `mode`)");
+  // Read only for a velocity pluck, so that the resolved scenario of a tip-force pluck has no
+  // mode to trip over when the process reads it again.
+  v(Key("mode")
+        .in(Range::between(1, 10))
+        .only_with(moving, "tip_velocity")
+        .doc("1-based, among distinct frequencies"),
+    p.mode);
+}
+
+// Section-wide checks: a static start and modal output.
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, BeamChecks>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("static_solve").doc("start from static equilibrium (still water, fully submerged)"),
+    p.static_solve);
+  v(Key("modes")
+        .in(Range::between(0, 20))
+        .doc("linear natural frequencies written per plant (0: none)"),
+    p.modes);
+}
+
 template <class P, class V>
 requires std::same_as<std::remove_const_t<P>, PlantRow>
 void visit_parameters(P& p, V& v) {
