@@ -40,12 +40,11 @@ int64_t protocol_schema_hash() {
   return static_cast<int64_t>(hash);
 }
 
-std::string run_lcm_url(int64_t run_id) {
+std::string run_lcm_url(int64_t run_id, int ttl) {
   const uint64_t mixed = static_cast<uint64_t>(run_id) * 0x9e3779b97f4a7c15ULL;
   const int port = 20000 + static_cast<int>(mixed % 40000);
   const int group_low = 1 + static_cast<int>((mixed >> 20) % 250);
-  // ttl=0 keeps the traffic on this host.
-  return fmt::format("udpm://239.255.76.{}:{}?ttl=0&recv_buf_size=4194304", group_low, port);
+  return fmt::format("udpm://239.255.76.{}:{}?ttl={}&recv_buf_size=4194304", group_low, port, ttl);
 }
 
 bool peek_header(const void* data, int size, int64_t type_hash, cosim_msgs::header_t& header) {

@@ -31,8 +31,8 @@ BuiltScene build_scene(DemWorld& world, const DebrisConfig& config) {
   // excessive overlap with both element ids).
   for (const auto& e : config.elements) {
     const int id =
-        e.log ? world.add_cylinder(e.center, e.axis, 0.5 * e.diameter, e.length, e.material)
-              : world.add_sphere(e.center, 0.5 * e.diameter, e.material);
+        e.is_log() ? world.add_cylinder(e.center, e.axis, 0.5 * e.diameter, e.length, e.material)
+                   : world.add_sphere(e.center, 0.5 * e.diameter, e.material);
     world.set_velocity(id, e.velocity);
     scene.explicit_elements.push_back(id);
   }

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "cosim/scenario/parameter_reader.hpp"
+#include "structure_keys.hpp"
 
 namespace cosim::dem {
 
@@ -36,51 +37,26 @@ void parse_flume(scenario::Section& section, DebrisConfig& config) {
   }
   auto flume = section.child("flume");
   FlumeSpec spec;
-  spec.length = flume.number("length", Range::positive());
-  spec.width = flume.number("width", Range::positive());
-  spec.wall_height = flume.number("wall_height", Range::positive());
-  spec.upstream_wall = flume.flag("upstream_wall", true);
+  scenario::read_parameters(flume, spec);  // the keys declared in structure_keys.hpp
   config.flume = spec;
   if (section.has("bed_roughness")) {
     auto rough = section.child("bed_roughness");
     RoughnessSettings r;
-    r.x0 = rough.number("x0", Range::non_negative());
-    r.x1 = rough.number("x1", Range::positive());
-    if (r.x1 <= r.x0) rough.fail("x1", "must exceed x0");
-    r.d_min = rough.number("d_min", Range::positive());
-    r.d_max = rough.number("d_max", Range::positive());
-    if (r.d_max < r.d_min) rough.fail("d_max", "must not be below d_min");
-    r.seed = static_cast<unsigned>(rough.integer("seed", 1, Range::non_negative()));
+    scenario::read_parameters(rough, r);
     config.roughness = r;
   }
   if (section.has("dam")) {
     auto dam = section.child("dam");
     GridDamSpec dam_spec;
-    dam_spec.x = dam.number("x", Range::positive());
-    if (dam_spec.x >= spec.length) dam.fail("x", "the dam must stand inside the flume");
     dam_spec.width = spec.width;
-    dam_spec.column_diameter =
-        dam.number("column_diameter", dam_spec.column_diameter, Range::positive());
-    dam_spec.horizontal_gap = dam.number("horizontal_gap", Range::positive());
-    dam_spec.vertical_gap = dam.number("vertical_gap", 0.0, Range::non_negative());
-    dam_spec.height = dam.number("height", spec.wall_height, Range::positive());
+    dam_spec.height = spec.wall_height;
+    scenario::read_parameters(dam, dam_spec);
+    if (dam_spec.x >= spec.length) dam.fail("x", "the dam must stand inside the flume");
     config.dam = dam_spec;
   }
 }
 
 // The random packing of seed 004 section 4.1(2), and the gate that holds it while it settles.
-// An axis-aligned box given by two corners; the second must exceed the first on every axis.
-std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_corners(scenario::Section& section,
-                                                          const std::string& min_key,
-                                                          const std::string& max_key) {
-  const Eigen::Vector3d low = section.vector3(min_key);
-  const Eigen::Vector3d high = section.vector3(max_key);
-  if ((high - low).minCoeff() <= 0) {
-    section.fail(max_key, "must exceed " + min_key + " in x, y and z");
-  }
-  return {low, high};
-}
-
 void parse_packing(scenario::Section& section, DebrisConfig& config) {
   if (!section.has("packing")) {
     forbid(section, "gate", "a packing");
@@ -88,11 +64,11 @@ void parse_packing(scenario::Section& section, DebrisConfig& config) {
   }
   auto packing = section.child("packing");
   PackingSpec spec;
-  std::tie(spec.box_min, spec.box_max) = parse_corners(packing, "box_min", "box_max");
+  scenario::read_parameters(packing, spec);
   scenario::MemoryBudget memory("debris_dem");
   for (auto& entry : packing.list("spheres")) {
-    SphereClass sphere_class{entry.number("diameter", Range::positive()),
-                             entry.integer("count", Range::between(0, 1e7))};
+    SphereClass sphere_class;
+    scenario::read_parameters(entry, sphere_class);
     memory.add(entry, "count", sphere_class.count * kBytesPerElement,
                fmt::format("{} spheres x {:g} B", sphere_class.count, kBytesPerElement));
     config.sphere_classes.push_back(sphere_class);
@@ -100,12 +76,8 @@ void parse_packing(scenario::Section& section, DebrisConfig& config) {
       spec.sphere_diameters.push_back(sphere_class.diameter);
     }
   }
-  spec.log_count = packing.integer("log_count", 0, Range::between(0, 1e6));
   memory.add(packing, "log_count", spec.log_count * kBytesPerElement,
              fmt::format("{} logs x {:g} B", spec.log_count, kBytesPerElement));
-  spec.log_diameter = packing.number("log_diameter", 0.01, Range::positive());
-  spec.log_length = packing.number("log_length", 0.1, Range::positive());
-  spec.seed = static_cast<unsigned>(packing.integer("seed", 1, Range::non_negative()));
   if (spec.sphere_diameters.empty() && spec.log_count == 0) {
     packing.fail("spheres", "no debris to pack");
   }
@@ -114,11 +86,10 @@ void parse_packing(scenario::Section& section, DebrisConfig& config) {
   auto gate = section.child("gate");
   if (!config.flume) gate.fail("x", "the gate spans a flume: give one");
   GateSettings settings;
-  settings.x = gate.number("x", Range::positive());
+  scenario::read_parameters(gate, settings);
   if (settings.x < spec.box_max.x()) {
     gate.fail("x", "the gate must stand downstream of the packing box");
   }
-  settings.settle_time = gate.number("settle_time", settings.settle_time, Range::non_negative());
   config.gate = settings;
 }
 
@@ -127,7 +98,7 @@ void parse_box(scenario::Section& section, DebrisConfig& config) {
   if (!section.has("box")) return;
   auto box = section.child("box");
   BoxSettings settings;
-  std::tie(settings.min, settings.max) = parse_corners(box, "min", "max");
+  scenario::read_parameters(box, settings);
   config.box = settings;
 }
 
@@ -135,21 +106,10 @@ void parse_elements(scenario::Section& section, DebrisConfig& config) {
   if (!section.has("elements")) return;
   for (auto& entry : section.list("elements")) {
     ElementSettings e;
-    e.log = entry.choice("kind", {"sphere", "log"}) == "log";
-    e.center = entry.vector3("center");
-    e.diameter = entry.number("diameter", Range::positive());
-    if (e.log) {
-      e.length = entry.number("length", Range::positive());
-      e.axis = entry.vector3("axis");
-      if (!(e.axis.norm() > 0.0)) entry.fail("axis", "must not be the zero vector");
-      e.axis.normalize();
-    } else {
-      forbid(entry, "length", "kind: log");
-      forbid(entry, "axis", "kind: log");
-    }
-    e.material = e.log ? config.logs : config.debris;
-    e.material.density = entry.number("density", Range::positive());
-    e.velocity = entry.vector3("velocity", Eigen::Vector3d::Zero());
+    scenario::read_parameters(entry, e);
+    if (e.is_log()) e.axis.normalize();
+    e.material = e.is_log() ? config.logs : config.debris;
+    e.material.density = e.density;
     if (config.box && ((e.center.array() < config.box->min.array()).any() ||
                        (e.center.array() > config.box->max.array()).any())) {
       entry.fail("center", "lies outside the box");
@@ -173,6 +133,39 @@ void set_domain(DebrisConfig& config) {
     const Eigen::Vector3d high = config.box->max + Eigen::Vector3d(margin, margin, 10 * margin);
     p.domain_min = config.flume ? Eigen::Vector3d(p.domain_min.cwiseMin(low)) : low;
     p.domain_max = config.flume ? Eigen::Vector3d(p.domain_max.cwiseMax(high)) : high;
+  }
+}
+
+// What each reference needs of the scene.
+void check_reference(scenario::Section& reference, const ElementReferenceSettings& r,
+                     const DebrisConfig& config) {
+  const DemParameters& p = config.parameters;
+  const std::string kind(scenario::choice_name(kElementReferenceKinds, r.kind));
+  if (r.kind == ReferenceKind::hindered) {
+    if (!config.packing || !config.elements.empty() || config.packing->log_count > 0 ||
+        config.sphere_classes.size() != 1 || p.drag_law != DragLaw::kSchillerNaumann) {
+      reference.fail("kind",
+                     "hindered settling needs a packing of one sphere class, no logs, no "
+                     "explicit elements, and drag_law: schiller_naumann");
+    }
+    return;
+  }
+  if (config.elements.size() != 1 || config.packing) {
+    reference.fail("kind", "a " + kind + " reference needs exactly one element and no packing");
+  }
+  if (r.kind == ReferenceKind::settling && p.drag_law != DragLaw::kSchillerNaumann) {
+    reference.fail("kind",
+                   "the settling reference is the Schiller-Naumann terminal velocity: "
+                   "set drag_law: schiller_naumann");
+  }
+  const double ratio = config.elements.front().material.density / p.fluid_density;
+  if (r.kind == ReferenceKind::settling && !(ratio > 1.0)) {
+    reference.fail("kind",
+                   "the element does not sink (density ratio " + std::to_string(ratio) + ")");
+  }
+  if (r.kind == ReferenceKind::floating && !(ratio > 0.0 && ratio < 1.0)) {
+    reference.fail("kind",
+                   "the element does not float (density ratio " + std::to_string(ratio) + ")");
   }
 }
 
@@ -206,38 +199,9 @@ DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& sce
   if (section.has("reference")) {
     auto reference = section.child("reference");
     ElementReferenceSettings r;
-    r.kind = reference.choice("kind", {"settling", "floating", "hindered"});
-    if (r.kind == "hindered") {
-      if (!config.packing || !config.elements.empty() || config.packing->log_count > 0 ||
-          config.sphere_classes.size() != 1 || p.drag_law != DragLaw::kSchillerNaumann) {
-        reference.fail("kind",
-                       "hindered settling needs a packing of one sphere class, no logs, no "
-                       "explicit elements, and drag_law: schiller_naumann");
-      }
-      r.average_from = reference.number("average_from", 0.0, Range::non_negative());
-      config.reference = r;
-    } else {
-      if (config.elements.size() != 1 || config.packing) {
-        reference.fail("kind",
-                       "a " + r.kind + " reference needs exactly one element and no packing");
-      }
-      if (r.kind == "settling" && p.drag_law != DragLaw::kSchillerNaumann) {
-        reference.fail("kind",
-                       "the settling reference is the Schiller-Naumann terminal velocity: "
-                       "set drag_law: schiller_naumann");
-      }
-      const double ratio = config.elements.front().material.density / p.fluid_density;
-      if (r.kind == "settling" && !(ratio > 1.0)) {
-        reference.fail("kind",
-                       "the element does not sink (density ratio " + std::to_string(ratio) + ")");
-      }
-      if (r.kind == "floating" && !(ratio > 0.0 && ratio < 1.0)) {
-        reference.fail("kind",
-                       "the element does not float (density ratio " + std::to_string(ratio) + ")");
-      }
-      r.average_from = reference.number("average_from", 0.0, Range::non_negative());
-      config.reference = r;
-    }
+    scenario::read_parameters(reference, r);
+    check_reference(reference, r, config);
+    config.reference = r;
   }
   return config;
 }

@@ -2,20 +2,10 @@
 // check dam and a gated debris packing, and/or a closed box open at the top), explicit elements,
 // materials, the fluid force model and numerical parameters (seed 004 table 3 as defaults).
 //
-// Structure (each optional; something must move: a packing or elements):
-//   flume: {length, width, wall_height, upstream_wall}; bed_roughness, dam: need the flume
-//   box: {min: [x, y, z], max: [x, y, z]}       floor and four walls, open top; max > min
-//   packing: {...}; gate: {x, settle_time}       the gate needs the flume and the packing
-//   elements: [{kind: sphere | log, center, diameter > 0, length > 0 (logs), axis != 0 (logs),
-//               density > 0, velocity (default 0)}]   contact constants of materials.debris/logs
-// Fluid forces (DemParameters, keys declared in dem_parameters.hpp; `cosim keys debris_dem`):
-//   drag_law: seed004 (default) | schiller_naumann
-//   drag_coefficient_sphere, drag_coefficient_cylinder >= 0      seed004 only
-//   fluid_viscosity in [1e-7, 1e6] Pa s (default 1e-3)            schiller_naumann only
-//   voidage_correction (default false), voidage_radius > 0 m      schiller_naumann only
-//   fluid_acceleration_force, added_mass    default true for schiller_naumann, false for seed004
-//   added_mass_coefficient (sphere, 0.5), added_mass_coefficient_log_normal (1),
-//   added_mass_coefficient_log_axial (0), each in [0, 5]          with added_mass only
+// Structure (each optional; something must move: a packing or elements): flume (bed_roughness
+// and dam need it), box, packing (a gate needs it and the flume), elements. Every key, its range
+// and its rules are declared once: DemParameters and Material in dem_parameters.hpp, the nested
+// keys in structure_keys.hpp (`cosim keys debris_dem`, docs/scenario-keys.md).
 #pragma once
 
 #include <optional>
@@ -44,15 +34,21 @@ struct BoxSettings {
   Eigen::Vector3d max = Eigen::Vector3d::Zero();
 };
 
+enum class ElementShape { sphere, log };
+inline constexpr scenario::Choices<ElementShape, 2> kElementShapes{
+    {{"sphere", ElementShape::sphere}, {"log", ElementShape::log}}};
+
 // One element of the `elements:` list: a sphere, or a log (flat-ended cylinder).
 struct ElementSettings {
-  bool log = false;
+  ElementShape shape = ElementShape::sphere;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
   double diameter = 0;
   double length = 0;                                // logs
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();  // logs, unit
+  double density = 0;                               // kg/m^3
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
   Material material;  // materials.debris (spheres) or materials.logs, with this density
+  bool is_log() const { return shape == ElementShape::log; }
 };
 
 struct GateSettings {

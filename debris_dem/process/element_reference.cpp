@@ -84,8 +84,8 @@ void ElementReference::observe(double time, const Eigen::Vector3d& center,
 }
 
 void ElementReference::report(coupler::MetricsReport& report) const {
-  if (settings_.kind == "settling") report_settling(report);
-  if (settings_.kind == "floating") report_floating(report);
+  if (settings_.kind == ReferenceKind::settling) report_settling(report);
+  if (settings_.kind == ReferenceKind::floating) report_floating(report);
 }
 
 void ElementReference::report_settling(coupler::MetricsReport& report) const {

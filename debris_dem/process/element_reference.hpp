@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cosim/coupler/metrics.hpp"
+#include "cosim/scenario/parameters.hpp"
 
 namespace cosim::dem {
 
@@ -24,8 +25,14 @@ double floating_cylinder_draft(double diameter, double density_ratio);
 // Draft of a floating sphere: the spherical cap of volume fraction s.
 double floating_sphere_draft(double diameter, double density_ratio);
 
+enum class ReferenceKind { settling, floating, hindered };
+inline constexpr scenario::Choices<ReferenceKind, 3> kElementReferenceKinds{
+    {{"settling", ReferenceKind::settling},
+     {"floating", ReferenceKind::floating},
+     {"hindered", ReferenceKind::hindered}}};
+
 struct ElementReferenceSettings {
-  std::string kind;           // settling | floating | hindered
+  ReferenceKind kind = ReferenceKind::settling;
   double average_from = 0.0;  // [s] time averages start here
 };
 

@@ -138,7 +138,7 @@ void finish_report(const dem::DemWorld& world, const dem::DebrisConfig& config,
     for (const auto& sphere_class : config.sphere_classes) {
       d_max = std::max(d_max, sphere_class.diameter);
     }
-    for (const auto& e : config.elements) d_max = std::max(d_max, e.log ? 0.0 : e.diameter);
+    for (const auto& e : config.elements) d_max = std::max(d_max, e.is_log() ? 0.0 : e.diameter);
     report.value("gap_ratio_lV_over_dmax", config.dam->vertical_gap / d_max, "");
   }
   report.value("woody_debris_ratio_K_w",
@@ -188,7 +188,7 @@ class DebrisProcess final : public coupler::Solver {
     // The gravity the DEM really uses, so the coupler refuses a scene that differs.
     context.declare_frame(3, 0.0, config_.parameters.gravity);
     dem::write_structure(world_, context.output_dir() / "structure");
-    if (config_.reference && config_.reference->kind == "hindered") {
+    if (config_.reference && config_.reference->kind == dem::ReferenceKind::hindered) {
       const auto& p = config_.parameters;
       const auto& packing = *config_.packing;
       const double d = config_.sphere_classes.front().diameter;
@@ -203,12 +203,12 @@ class DebrisProcess final : public coupler::Solver {
       const auto& p = config_.parameters;
       const double ratio = e.material.density / p.fluid_density;
       double value = 0.0;
-      if (config_.reference->kind == "settling") {
+      if (config_.reference->kind == dem::ReferenceKind::settling) {
         value = dem::schiller_naumann_terminal_velocity(
             e.diameter, e.material.density, p.fluid_density, p.fluid_viscosity, p.gravity.norm());
       } else {
-        value = e.log ? dem::floating_cylinder_draft(e.diameter, ratio)
-                      : dem::floating_sphere_draft(e.diameter, ratio);
+        value = e.is_log() ? dem::floating_cylinder_draft(e.diameter, ratio)
+                           : dem::floating_sphere_draft(e.diameter, ratio);
       }
       reference_.emplace(*config_.reference, value, 0.5 * e.diameter);
     }

@@ -91,9 +91,9 @@ TEST(DemConfig, BoxAndElementsWithTheUnresolvedFluidForceSet) {
   EXPECT_FALSE(config.flume || config.packing || config.gate || config.dam);
   ASSERT_TRUE(config.box);
   ASSERT_EQ(config.elements.size(), 2u);
-  EXPECT_FALSE(config.elements[0].log);
+  EXPECT_FALSE(config.elements[0].is_log());
   EXPECT_DOUBLE_EQ(config.elements[0].material.density, 1120.0);
-  EXPECT_TRUE(config.elements[1].log);
+  EXPECT_TRUE(config.elements[1].is_log());
   EXPECT_EQ(config.elements[1].axis, Eigen::Vector3d::UnitY());
   EXPECT_EQ(config.elements[1].velocity, Eigen::Vector3d(0.1, 0, 0));
   // Element materials take the contact constants of materials.debris / materials.logs.
@@ -157,6 +157,23 @@ TEST(DemConfig, ErrorsNameFileLineAndKey) {
        "nothing moves: give a packing or elements"},
       {"    dam: {x: 0.5, horizontal_gap: 0.05}\n" + sphere, "dam", "dam",
        "only used with a flume"},
+      // Nested keys, read from their declarations (structure_keys.hpp).
+      {"    flume: {length: 1.0, width: 0.3, wall_height: 0.15}\n"
+       "    dam: {x: 0.5, horizontal_gap: 0.05, vertical_gap: -0.01}\n" +
+           sphere,
+       "vertical_gap", "dam.vertical_gap", "value -0.01 is out of range [0, inf]"},
+      {"    flume: {length: 1.0, width: 0.3, wall_height: 0.15}\n"
+       "    bed_roughness: {x0: 0.5, x1: 0.2, d_min: 0.007, d_max: 0.02}\n" +
+           sphere,
+       "bed_roughness", "bed_roughness.x1", "must exceed x0"},
+      {"    packing:\n      box_min: [0, 0, 0]\n      box_max: [0.1, 0.1, 0.1]\n"
+       "      seed: -3\n      spheres: [{diameter: 0.01, count: 5}]\n",
+       "seed", "packing.seed", "value -3 is out of range [0, 2147483647]"},
+      {"    packing:\n      box_min: [0, 0, 0]\n      box_max: [0.1, 0.1, 0.1]\n"
+       "      spheres: [{diameter: 0.01}]\n",
+       "spheres", "packing.spheres[0].count", "required key is missing"},
+      {"    reference: {kind: sinking}\n" + sphere, "sinking", "reference.kind",
+       "'sinking' is not one of: settling, floating, hindered"},
   };
   for (const Case& c : cases) {
     const auto [message, line] = error_and_line(c.body, c.needle);

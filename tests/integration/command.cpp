@@ -27,6 +27,10 @@ CommandResult run_command(const std::string& command, int time_limit_seconds) {
   return result;
 }
 
+std::filesystem::path bin_dir() {
+  return COSIM_BIN_DIR;
+}
+
 CommandResult run_cosim(const std::string& arguments, int time_limit_seconds) {
   return run_command(fmt::format("{}/cosim {}", COSIM_BIN_DIR, arguments), time_limit_seconds);
 }

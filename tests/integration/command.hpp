@@ -18,6 +18,9 @@ struct CommandResult {
 // Runs a shell command (with a hard time limit, so a hang fails the test instead of blocking it).
 CommandResult run_command(const std::string& command, int time_limit_seconds = 120);
 
+// The build's bin folder (cosim and the solvers).
+std::filesystem::path bin_dir();
+
 // `cosim` with arguments, from the build's bin folder.
 CommandResult run_cosim(const std::string& arguments, int time_limit_seconds = 120);
 

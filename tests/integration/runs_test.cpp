@@ -96,6 +96,72 @@ TEST(Runs, TenPercentMessageLossGivesTheSameResultAsNoLoss) {
   }
 }
 
+// Two hosts: the blade runs in a second network namespace joined to the coupler's by a veth link
+// (two_hosts.sh), started there with the `cosim join` line the run printed.
+TEST(Runs, AParticipantOnAnotherHostGivesTheSameResultAsOnOneHost) {
+  const auto runs = fresh_folder("two_hosts");
+  const auto one_host =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet", blade(), runs.string()));
+  ASSERT_EQ(one_host.exit_code, 0) << one_host.output;
+  const auto two_hosts = run_command(fmt::format("./two_hosts.sh {} {} {} vegetation_beam",
+                                                 bin_dir().string(), blade(), runs.string()),
+                                     180);
+  if (two_hosts.exit_code == 77) GTEST_SKIP() << two_hosts.output;
+  ASSERT_EQ(two_hosts.exit_code, 0) << two_hosts.output;
+  EXPECT_NE(two_hosts.output.find("cosim: start 'vegetation_beam' on its host now"),
+            std::string::npos)
+      << two_hosts.output;
+  const auto run_dir = run_folder_of(two_hosts);
+  const auto summary = read_summary(run_dir);
+  EXPECT_EQ(summary["remote_participants"], nlohmann::json::array({"vegetation_beam"}));
+  EXPECT_NE(summary["lcm_url"].get<std::string>().find("ttl=1"), std::string::npos);
+  // The remote participant wrote its outputs where the join line said (a shared folder here).
+  EXPECT_EQ(output::count_point_frames(run_dir / "vegetation_beam/plants.h5"), 5);
+  const auto expected = beam_fields(run_folder_of(one_host));
+  const auto actual = beam_fields(run_dir);
+  ASSERT_EQ(expected.size(), 21u * 3u);
+  ASSERT_EQ(expected.size(), actual.size());
+  for (const auto& [key, values] : expected) {
+    ASSERT_TRUE(actual.contains(key));
+    EXPECT_EQ(values, actual.at(key)) << "window " << key.first << " field " << key.second;
+  }
+}
+
+TEST(Runs, ARemoteParticipantIsCheckedBeforeAnythingStarts) {
+  const auto runs = fresh_folder("remote_refused");
+  const auto unknown = run_cosim(
+      fmt::format("run {} --runs-dir {} --quiet --remote nobody", blade(), runs.string()));
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.output.find("--remote 'nobody': this scene runs no participant 'nobody' (it "
+                                "runs prescribed_flow, vegetation_beam)"),
+            std::string::npos)
+      << unknown.output;
+  const auto private_network =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet --remote vegetation_beam --network "
+                            "private",
+                            blade(), runs.string()));
+  EXPECT_EQ(private_network.exit_code, 2);
+  EXPECT_NE(private_network.output.find("--network private cannot be combined with --remote"),
+            std::string::npos)
+      << private_network.output;
+  const auto faulty = run_cosim(fmt::format(
+      "run {} --runs-dir {} --quiet --remote vegetation_beam --fault vegetation_beam:exit@3",
+      blade(), runs.string()));
+  EXPECT_EQ(faulty.exit_code, 2);
+  EXPECT_NE(faulty.output.find("a fault can only be injected into a process this command starts"),
+            std::string::npos)
+      << faulty.output;
+  EXPECT_TRUE(std::filesystem::is_empty(runs)) << "no run folder for a refused run";
+  // Nobody types the join line: the run names the participant it waited for.
+  const auto never_joined = run_cosim(
+      fmt::format("run {} --runs-dir {} --quiet --remote vegetation_beam --startup-timeout 1",
+                  blade(), runs.string()));
+  EXPECT_EQ(never_joined.exit_code, 1);
+  EXPECT_NE(never_joined.output.find("participant(s) vegetation_beam did not start within 1 s"),
+            std::string::npos)
+      << never_joined.output;
+}
+
 TEST(Runs, ASolverThatDiesIsNamedWithItsWindowWithinSeconds) {
   const auto runs = fresh_folder("exit");
   const auto result =

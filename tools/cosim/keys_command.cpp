@@ -10,6 +10,8 @@
 #include "cosim/scenario/parameters.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
+#include "section_keys.hpp"
+#include "structure_keys.hpp"
 
 namespace cosim::tool {
 
@@ -36,6 +38,65 @@ Group group(std::string title, std::string source, std::string prefix, const T& 
   return g;
 }
 
+// More rows under another prefix in the same table.
+template <class T>
+void add_rows(Group& g, std::string prefix, const T& defaults = T{}) {
+  g.table.set_prefix(std::move(prefix));
+  scenario::describe_parameters(g.table, defaults);
+}
+
+std::vector<Group> vegetation_groups() {
+  const char* header = "vegetation_beam/include/cosim/vegetation_beam/plant_field.hpp";
+  const char* section_keys = "vegetation_beam/process/section_keys.hpp";
+  std::vector<Group> groups{
+      group<vegetation::BeamParameters>("BeamParameters", header, ""),
+      group<vegetation::PlantSpec>("PlantSpec, one per `plants` entry", header, "plants[].",
+                                   vegetation::scenario_plant_defaults()),
+      group<vegetation::PlantRow>("A `plants` entry as a row of equal plants", section_keys,
+                                  "plants[]."),
+      group<vegetation::CanopySettings>("Canopy measures (seed 000 section 4)", section_keys,
+                                        "canopy.")};
+  Group checks = group<vegetation::PointLoadSettings>(
+      "Beam checks (references/cantilever.md): loads and plucks per `plants` entry, a static "
+      "start and modes for the section",
+      section_keys, "plants[].point_loads[].");
+  add_rows<vegetation::PluckSettings>(checks, "plants[].pluck.");
+  add_rows<vegetation::BeamChecks>(checks, "");
+  groups.push_back(std::move(checks));
+  groups.push_back(
+      group<vegetation::ElasticaReference>("The reference", section_keys, "reference."));
+  return groups;
+}
+
+std::vector<Group> debris_groups() {
+  const char* header = "debris_dem/include/cosim/debris_dem/dem_parameters.hpp";
+  const char* structure = "debris_dem/process/structure_keys.hpp";
+  std::vector<Group> groups{
+      group<dem::DemParameters>("DemParameters", header, ""),
+      group<dem::Material>("Material of spheres", header, "materials.debris.",
+                           dem::default_debris_material()),
+      group<dem::Material>("Material of logs", header, "materials.logs.",
+                           dem::default_log_material()),
+      group<dem::Material>("Material of the structure", header, "materials.structure.",
+                           dem::default_debris_material())};
+  Group flume = group<dem::FlumeSpec>(
+      "The structure: seed 004's flume (bed_roughness and dam need it) and a box", structure,
+      "flume.");
+  add_rows<dem::RoughnessSettings>(flume, "bed_roughness.");
+  add_rows<dem::GridDamSpec>(flume, "dam.");
+  add_rows<dem::BoxSettings>(flume, "box.");
+  groups.push_back(std::move(flume));
+  Group packing = group<dem::PackingSpec>(
+      "The random packing (seed 004 section 4.1(2)) and its gate", structure, "packing.");
+  add_rows<dem::SphereClass>(packing, "packing.spheres[].");
+  add_rows<dem::GateSettings>(packing, "gate.");
+  groups.push_back(std::move(packing));
+  groups.push_back(
+      group<dem::ElementSettings>("Elements, one per `elements` entry", structure, "elements[]."));
+  groups.push_back(group<dem::ElementReferenceSettings>("The reference", structure, "reference."));
+  return groups;
+}
+
 const std::vector<Participant>& participants() {
   static const std::vector<Participant> list{
       {"fluid_mps",
@@ -47,30 +108,10 @@ const std::vector<Participant>& participants() {
              "MpsParameters", "fluid_mps/include/cosim/fluid_mps/parameters.hpp", "")};
        }},
       {"vegetation_beam",
-       "`plants[].count`, `plants[].spacing`, the beam checks (`point_loads`, `pluck`, "
-       "`static_solve`, `modes`), `canopy`, `reference` and `output_interval` are read in "
-       "`vegetation_beam/process/`.",
-       [] {
-         const char* header = "vegetation_beam/include/cosim/vegetation_beam/plant_field.hpp";
-         return std::vector<Group>{
-             group<vegetation::BeamParameters>("BeamParameters", header, ""),
-             group<vegetation::PlantSpec>("PlantSpec, one per `plants` entry", header, "plants[].",
-                                          vegetation::scenario_plant_defaults())};
-       }},
-      {"debris_dem",
-       "The structure (`flume`, `bed_roughness`, `dam`, `box`), `packing`, `gate`, `elements`, "
-       "`reference` and `output_interval` are read in `debris_dem/process/dem_config.cpp`.",
-       [] {
-         const char* header = "debris_dem/include/cosim/debris_dem/dem_parameters.hpp";
-         return std::vector<Group>{
-             group<dem::DemParameters>("DemParameters", header, ""),
-             group<dem::Material>("Material of spheres", header, "materials.debris.",
-                                  dem::default_debris_material()),
-             group<dem::Material>("Material of logs", header, "materials.logs.",
-                                  dem::default_log_material()),
-             group<dem::Material>("Material of the structure", header, "materials.structure.",
-                                  dem::default_debris_material())};
-       }},
+       "`output_interval` is read in `vegetation_beam/process/vegetation_config.cpp`.",
+       vegetation_groups},
+      {"debris_dem", "`output_interval` is read in `debris_dem/process/dem_config.cpp`.",
+       debris_groups},
       {"prescribed_flow", "",
        [] {
          return std::vector<Group>{group<prescribed_flow::ProfileSettings>(

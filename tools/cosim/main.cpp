@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "cosim_version.hpp"
+#include "join_command.hpp"
 #include "keys_command.hpp"
 #include "network.hpp"
 #include "plot.hpp"
@@ -65,6 +66,20 @@ bool ensure_network(const std::string& mode, int argc, char** argv) {
   throw std::runtime_error(problem);
 }
 
+// A run with participants on other hosts needs this host's network, with a multicast route.
+void check_network_reaches_other_hosts(const std::string& mode) {
+  if (mode == "private") {
+    throw std::invalid_argument(
+        "--network private cannot be combined with --remote: a private namespace reaches no "
+        "other host");
+  }
+  if (!std::getenv(tool::kPrivateNetworkVariable) && !tool::multicast_available()) {
+    throw std::runtime_error(
+        "--remote: this host has no multicast route, so the other hosts cannot hear the run; add "
+        "one on the interface that leads to them, e.g. `ip route add 224.0.0.0/4 dev eth0`");
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -100,9 +115,10 @@ int main(int argc, char** argv) {
                      "private")
         ->check(CLI::IsMember({"auto", "host", "private"}));
     command
-        ->add_option("--record", record,
-                     "what events.lcmlog.zst keeps: all (replayable), control (windows and reports, "
-                     "no field values), none (no log)")
+        ->add_option(
+            "--record", record,
+            "what events.lcmlog.zst keeps: all (replayable), control (windows and reports, "
+            "no field values), none (no log)")
         ->check(CLI::IsMember({"all", "control", "none"}));
     command->add_flag("--quiet", quiet, "no progress lines");
     command
@@ -120,6 +136,15 @@ int main(int argc, char** argv) {
                   "without @TIME)");
   add_run_options(run);
   add_overrides(run);
+  run->add_option("--remote", request.remote,
+                  "a participant started by hand on another host with `cosim join` (the line "
+                  "to type is printed); repeat for several");
+  run->add_option("--lcm-ttl", request.lcm_ttl,
+                  "multicast time-to-live of a run with --remote (1: the local network)")
+      ->default_val(1);
+  run->add_option("--startup-timeout", request.startup_timeout,
+                  "seconds every participant has to start (default 60, or 600 with --remote)")
+      ->check(finite_range(1.0, 86400.0));
 
   auto* validate = app.add_subcommand("validate", "check a scenario bundle without running it");
   validate->add_option("bundle", bundle, "scenario folder (or its scenario.yaml)")->required();
@@ -156,6 +181,8 @@ int main(int argc, char** argv) {
   add_run_options(replay_command);
 
   tool::add_keys_command(app);  // cosim keys [participant]: the key reference
+  tool::JoinRequest join;
+  auto* join_command = tool::add_join_command(app, join);
   CLI11_PARSE(app, argc, argv);
   try {
     request.faults = parse_faults(faults);
@@ -171,11 +198,20 @@ int main(int argc, char** argv) {
       // Checked before the network, so a bad scenario is reported before anything starts.
       const auto scene = tool::load_with_overrides(bundle, overrides);
       tool::check_run_request(scene, request);
+      if (!restart.empty() && !request.remote.empty()) {
+        throw std::invalid_argument(
+            "--restart cannot be combined with --remote yet: a remote participant's checkpoint "
+            "is on its own host, and `cosim join` does not take one");
+      }
       if (!restart.empty()) {
         request.restart = tool::parse_restart(restart);
         tool::resolve_restart(scene, *request.restart);  // refused before the network too
       }
-      if (!ensure_network(network, argc, argv)) return 2;
+      if (request.remote.empty()) {
+        if (!ensure_network(network, argc, argv)) return 2;
+      } else {
+        check_network_reaches_other_hosts(network);
+      }
       const auto outcome = tool::run_scene(scene, request);
       if (outcome.interrupted_by != 0) {
         fmt::print(stderr, "{}\n", tool::interruption_line(outcome));
@@ -184,6 +220,7 @@ int main(int argc, char** argv) {
       tool::print_report(outcome.run_dir);
       return outcome.exit_code;
     }
+    if (join_command->parsed()) tool::join_run(join);
     if (plot_command->parsed()) {
       std::vector<std::string> notes;
       const auto files = tool::plot_run(plot_dir, notes);

@@ -145,9 +145,12 @@ void check_fault(const scenario::Scene& scene, const std::string& name, const st
   }
 }
 
-void check_executables(const scenario::Scene& scene) {
+bool is_remote(const RunRequest& request, const std::string& name);
+
+void check_executables(const scenario::Scene& scene, const RunRequest& request) {
   const auto bin = coupler::executable_dir();
   for (const auto& entry : scene.participants) {
+    if (is_remote(request, entry.name)) continue;  // built on its own host
     const auto executable = bin / entry.executable;
     if (!std::filesystem::exists(executable)) {
       throw std::runtime_error(fmt::format("the solver '{}' is not built: {} does not exist",
@@ -165,6 +168,43 @@ nlohmann::json parse_metrics(const std::string& text) {
   }
 }
 
+void check_remote(const scenario::Scene& scene, const RunRequest& request) {
+  std::vector<std::string> seen;
+  for (const auto& name : request.remote) {
+    const auto refuse = [&](const std::string& problem) {
+      throw std::invalid_argument(fmt::format("--remote '{}': {}", name, problem));
+    };
+    const auto entry = std::find_if(scene.participants.begin(), scene.participants.end(),
+                                    [&](const auto& e) { return e.name == name; });
+    if (entry == scene.participants.end()) {
+      std::vector<std::string> names;
+      for (const auto& e : scene.participants) names.push_back(e.name);
+      refuse(fmt::format("this scene runs no participant '{}' (it runs {})", name,
+                         fmt::join(names, ", ")));
+    }
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) refuse("given twice");
+    seen.push_back(name);
+    if (request.faults.contains(entry->name) || request.faults.contains(entry->acts_as)) {
+      refuse("a fault can only be injected into a process this command starts");
+    }
+  }
+  if (!request.remote.empty() && (request.lcm_ttl < 1 || request.lcm_ttl > 255)) {
+    throw std::invalid_argument(fmt::format(
+        "--lcm-ttl {}: a run with remote participants needs 1 to 255", request.lcm_ttl));
+  }
+}
+
+bool is_remote(const RunRequest& request, const std::string& name) {
+  return std::find(request.remote.begin(), request.remote.end(), name) != request.remote.end();
+}
+
+// What to type on the other host: `cosim join` with this run's address and scenario.
+std::string join_command(const std::filesystem::path& run_dir, const std::string& name,
+                         const std::string& url, int64_t run_id) {
+  return fmt::format("cosim join --scenario {} --run-dir {} --name {} --lcm-url '{}' --run-id {}",
+                     (run_dir / "scenario.yaml").string(), run_dir.string(), name, url, run_id);
+}
+
 }  // namespace
 
 const std::vector<std::string>& fault_kinds() {
@@ -174,6 +214,7 @@ const std::vector<std::string>& fault_kinds() {
 
 void check_run_request(const scenario::Scene& scene, const RunRequest& request) {
   for (const auto& [name, spec] : request.faults) check_fault(scene, name, spec);
+  check_remote(scene, request);
   const double loss = request.loss_probability;
   if (!std::isfinite(loss) || loss < 0.0 || loss > 0.5) {
     throw std::invalid_argument(
@@ -209,6 +250,7 @@ nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& reques
   }
   summary["checkpoints"] = result.checkpoints;
   summary["injected_loss"] = request.loss_probability;
+  summary["remote_participants"] = request.remote;
   // `cosim replay` reads this to tell a log without field values from a damaged one.
   summary["record"] = coupler::record_mode_name(request.record_mode);
   nlohmann::json participants = nlohmann::json::array();
@@ -263,6 +305,16 @@ void run_participants(const scenario::Scene& scene, const RunRequest& request,
   // steal the cores their partners compute on (docs/performance.md, fluid_mps).
   setenv("OMP_WAIT_POLICY", "passive", 0);
   for (const auto& entry : scene.participants) {
+    if (is_remote(request, entry.name)) {
+      // Printed and flushed before the handshake waits for it.
+      fmt::print(
+          "cosim: start '{}' on its host now (the run waits {:.0f} s for it); copy {} "
+          "there first unless that host shares this folder:\n  {}\n",
+          entry.name, options.startup_timeout, (outcome.run_dir / "scenario.yaml").string(),
+          join_command(outcome.run_dir, entry.name, options.url, options.run_id));
+      std::fflush(stdout);
+      continue;
+    }
     std::string fault;
     if (auto found = request.faults.find(entry.name); found != request.faults.end())
       fault = found->second;
@@ -288,13 +340,14 @@ void run_participants(const scenario::Scene& scene, const RunRequest& request,
 RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
   // Everything the command line got wrong is refused before the run folder exists.
   check_run_request(scene, request);
-  check_executables(scene);
+  check_executables(scene, request);
   // A checkpoint that does not fit is refused before the run folder exists.
   std::optional<ResolvedRestart> restart;
   if (request.restart) restart = resolve_restart(scene, *request.restart);
   RunOutcome outcome;
   const int64_t run_id = new_run_id();
-  const std::string url = coupler::run_lcm_url(run_id);
+  const std::string url =
+      coupler::run_lcm_url(run_id, request.remote.empty() ? 0 : request.lcm_ttl);
   const std::string label =
       request.run_label.empty() ? scene.name : scene.name + "-" + request.run_label;
   outcome.run_dir = make_run_dir(request.runs_dir, label, run_id);
@@ -320,6 +373,8 @@ RunOutcome run_scene(const scenario::Scene& scene, const RunRequest& request) {
     options.restart = restart->point;
     options.checkpoints.manifest["restarted_from"] = restart->folder.string();
   }
+  options.startup_timeout =
+      request.startup_timeout > 0.0 ? request.startup_timeout : (request.remote.empty() ? 60 : 600);
 
   coupler::ProcessGroup processes;
   InterruptWatch watch(processes);

@@ -24,6 +24,11 @@ struct RunRequest {
   std::map<std::string, std::string> faults;  // participant -> "exit@W" / "hang@W" / "throw@W"
   // Continue from a coupled checkpoint of an earlier run (checked before anything starts).
   std::optional<RestartSource> restart;
+  // Participants started by hand on other hosts (`cosim join`), not by this command; the run's
+  // multicast then leaves this host with time-to-live `lcm_ttl`.
+  std::vector<std::string> remote;
+  int lcm_ttl = 1;
+  double startup_timeout = 0.0;  // s for every participant to start; 0: 60, or 600 with remote
   bool show_progress = true;
   double progress_interval =
       0.0;  // seconds between progress lines; 0: 1 s on a terminal, else 10 s
@@ -41,7 +46,8 @@ const std::vector<std::string>& fault_kinds();
 
 // Checks what the command line asks of a run against the scene, before anything is made or
 // started: every --fault names a participant of the scene, a known kind and a window 1..N;
-// the injected loss is a finite fraction in [0, 0.5]. Throws std::invalid_argument naming the
+// the injected loss is a finite fraction in [0, 0.5]; every --remote names a participant once,
+// without a fault. Throws std::invalid_argument naming the
 // option and its value.
 void check_run_request(const scenario::Scene& scene, const RunRequest& request);
 

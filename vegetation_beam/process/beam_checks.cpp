@@ -7,31 +7,18 @@
 #include <fstream>
 #include <stdexcept>
 
-namespace cosim::vegetation {
+#include "cosim/scenario/parameter_reader.hpp"
+#include "section_keys.hpp"
 
-using scenario::Range;
+namespace cosim::vegetation {
 
 namespace {
 
 // The modes come from a dense generalized eigen solve of the 3 x links degrees of freedom of a
 // plant (PlantField::linear_modes): 300 links (900 dofs) take about a second.
 constexpr int kModalLinkLimit = 300;
-// Largest force (N) and tip speed (m/s) the keys accept: far beyond any plant of seed 000 (the
-// honami reeds carry about 1 N of drag), and small enough to catch a unit slip.
-constexpr double kForceLimit = 1e6;
-constexpr double kSpeedLimit = 100.0;
 // A mode must give the asked tip velocity to this fraction of its size.
 constexpr double kTipVelocityTolerance = 0.01;
-
-Eigen::Vector3d bounded_vector(scenario::Section& section, const std::string& key,
-                               const Eigen::Vector3d* fallback, double limit,
-                               const std::string& unit) {
-  const Eigen::Vector3d value = fallback ? section.vector3(key, *fallback) : section.vector3(key);
-  if (!value.allFinite() || value.norm() > limit)
-    section.fail(key,
-                 fmt::format("must be finite with a magnitude of at most {:g} {}", limit, unit));
-  return value;
-}
 
 std::string format_vector(const Eigen::Vector3d& v) {
   return fmt::format("[{:.4g}, {:.4g}, {:.4g}]", v.x(), v.y(), v.z());
@@ -55,35 +42,27 @@ void parse_plant_checks(scenario::Section& group, const PlantSpec& spec,
                         BeamChecks& checks) {
   if (group.has("point_loads")) {
     for (auto& entry : group.list("point_loads")) {
-      // Fraction of the length from the base; the load goes to the nearest node.
-      const double at = entry.number("at", Range{0.0, 1.0, true});
-      const int node = static_cast<int>(std::lround(at * spec.links));
+      PointLoadSettings load;
+      scenario::read_parameters(entry, load);  // section_keys.hpp
+      const int node = static_cast<int>(std::lround(load.at * spec.links));
       if (node == 0) {
         entry.fail("at", fmt::format("{} is nearest to the clamped base (node 0 of {} links), "
                                      "where a load does nothing",
-                                     at, spec.links));
+                                     load.at, spec.links));
       }
-      const Eigen::Vector3d force = bounded_vector(entry, "force", nullptr, kForceLimit, "N");
-      for (int i = 0; i < count; ++i) checks.point_loads.push_back({first_plant + i, node, force});
+      for (int i = 0; i < count; ++i)
+        checks.point_loads.push_back({first_plant + i, node, load.force});
     }
   }
   if (!group.has("pluck")) return;
   auto pluck_section = group.child("pluck");
+  PluckSettings settings;
+  scenario::read_parameters(pluck_section, settings);
   Pluck pluck;
-  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  pluck.tip_force = bounded_vector(pluck_section, "tip_force", &zero, kForceLimit, "N");
-  pluck.tip_velocity = bounded_vector(pluck_section, "tip_velocity", &zero, kSpeedLimit, "m/s");
-  const bool deflected = pluck.tip_force.norm() > 0, moving = pluck.tip_velocity.norm() > 0;
-  if (deflected == moving) {
-    pluck_section.fail(deflected ? "tip_velocity" : "tip_force",
-                       "give one of tip_force (a released deflection) or tip_velocity (a start "
-                       "in the velocity of linear mode `mode`)");
-  }
-  // Read only for a velocity pluck, so that the resolved scenario of a tip-force pluck has no
-  // mode to trip over when the process reads it again.
-  if (!moving && pluck_section.has("mode"))
-    pluck_section.fail("mode", "only a tip_velocity pluck uses a mode");
-  if (moving) pluck.mode = pluck_section.integer("mode", 1, Range::between(1, 10));
+  pluck.tip_force = settings.tip_force;
+  pluck.tip_velocity = settings.tip_velocity;
+  pluck.mode = settings.mode;
+  const bool moving = pluck.tip_velocity.norm() > 0;
   pluck.where = fmt::format("{}:{}: key '{}.{}'", pluck_section.file().string(),
                             pluck_section.line_of(moving ? "tip_velocity" : "tip_force"),
                             pluck_section.path(), moving ? "tip_velocity" : "tip_force");
@@ -107,8 +86,7 @@ void parse_plant_checks(scenario::Section& group, const PlantSpec& spec,
 
 void parse_section_checks(scenario::Section& section, const std::vector<PlantSpec>& plants,
                           BeamChecks& checks) {
-  checks.static_solve = section.flag("static_solve", checks.static_solve);
-  checks.modes = section.integer("modes", checks.modes, Range::between(0, 20));
+  scenario::read_parameters(section, checks);  // static_solve, modes (section_keys.hpp)
   for (std::size_t plant = 0; plant < plants.size() && checks.modes > 0; ++plant) {
     if (plants[plant].links > kModalLinkLimit) {
       section.fail("modes", fmt::format("plant {} has {} links; the modes are computed densely "

@@ -31,6 +31,18 @@ struct Pluck {
   std::string where;  // "file:line: key '...'" of the pluck, for errors found at the start
 };
 
+// The keys of one plants[i].point_loads entry and of plants[i].pluck, as the scenario gives
+// them (section_keys.hpp declares them).
+struct PointLoadSettings {
+  double at = 0.0;                                  // fraction of the length from the base
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N, world frame
+};
+struct PluckSettings {
+  Eigen::Vector3d tip_force = Eigen::Vector3d::Zero();     // N
+  Eigen::Vector3d tip_velocity = Eigen::Vector3d::Zero();  // m/s
+  int mode = 1;
+};
+
 struct BeamChecks {
   std::vector<PointLoad> point_loads;
   std::vector<Pluck> plucks;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "cosim/scenario/parameter_reader.hpp"
+#include "section_keys.hpp"
 
 namespace cosim::vegetation {
 
@@ -17,11 +18,10 @@ void parse_plant_group(scenario::Section& group, const BeamParameters& parameter
   // World frame (docs/architecture.md): z is up, so plants stand along +z unless told otherwise.
   PlantSpec spec = scenario_plant_defaults();
   scenario::read_parameters(group, spec);  // the keys declared in plant_field.hpp
-  const int count = group.integer("count", 1, Range::between(1, 1000000));
-  const Eigen::Vector3d spacing = group.vector3("spacing", Eigen::Vector3d::Zero());
-  if (count > 1 && spacing.norm() == 0.0) {
-    group.fail("spacing", "a row of several plants needs a non-zero spacing");
-  }
+  PlantRow row;
+  scenario::read_parameters(group, row);  // section_keys.hpp
+  const int count = row.count;
+  const Eigen::Vector3d spacing = row.spacing;
   const double nodes = static_cast<double>(count) * (spec.links + 1.0);
   memory.add(group, count > 1 ? "count" : "links", estimated_memory_bytes(count, nodes),
              fmt::format("{} plants x {} links: {:.3g} nodes x {:g} B", count, spec.links, nodes,
@@ -55,26 +55,19 @@ VegetationConfig parse_config(scenario::Section& section, const scenario::Scene&
   if (section.has("canopy")) {
     auto canopy = section.child("canopy");
     CanopySettings settings;
-    settings.psi_radius =
-        canopy.number("psi_radius", 7.0 * config.plants.front().width, Range::positive());
-    settings.streamwise = canopy.vector3("streamwise", settings.streamwise);
-    if (settings.streamwise.norm() == 0.0) canopy.fail("streamwise", "must not be zero");
+    settings.psi_radius = 7.0 * config.plants.front().width;
+    settings.tip_interval = config.output_interval;
+    scenario::read_parameters(canopy, settings);
     settings.streamwise.normalize();
-    settings.amplitude_from = canopy.number("amplitude_from", 0.0, Range::non_negative());
-    settings.tip_interval =
-        canopy.number("tip_interval", config.output_interval, Range::positive());
     config.canopy = settings;
   }
   if (section.has("reference")) {
     auto reference = section.child("reference");
-    reference.choice("kind", {"elastica_uniform_flow"});
     ElasticaReference elastica;
-    elastica.plant = reference.integer("plant", 0, Range::between(0, 1e9));
+    scenario::read_parameters(reference, elastica);
     if (elastica.plant >= static_cast<int>(config.plants.size())) {
       reference.fail("plant", fmt::format("there are only {} plants", config.plants.size()));
     }
-    elastica.velocity = reference.vector3("velocity");
-    elastica.average_over = reference.number("average_over", Range::positive());
     config.elastica_reference = elastica;
   }
   return config;

@@ -14,7 +14,12 @@ namespace cosim::vegetation {
 
 // The steady bent shape of one plant in a uniform stream, from the large-deflection elastica
 // (see elastica.hpp): the run's time-averaged tip position is compared with it.
+enum class ReferenceKind { elastica_uniform_flow };
+inline constexpr scenario::Choices<ReferenceKind, 1> kReferenceKinds{
+    {{"elastica_uniform_flow", ReferenceKind::elastica_uniform_flow}}};
+
 struct ElasticaReference {
+  ReferenceKind kind = ReferenceKind::elastica_uniform_flow;
   int plant = 0;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // the uniform stream
   double average_over = 0.0;  // seconds at the end of the run over which the tip is averaged
@@ -28,6 +33,12 @@ struct CanopySettings {
   Eigen::Vector3d streamwise = Eigen::Vector3d::UnitX();
   double amplitude_from = 0.0;  // tip extremes are tracked from this time on [s]
   double tip_interval = 0.0;    // [s] between tip rows; default: the output_interval
+};
+
+// One `plants` entry is a row of `count` equal plants, `spacing` apart (besides its PlantSpec).
+struct PlantRow {
+  int count = 1;
+  Eigen::Vector3d spacing = Eigen::Vector3d::Zero();
 };
 
 struct VegetationConfig {

@@ -45,7 +45,9 @@ int64_t protocol_schema_hash();
 
 // The LCM URL of a run: a port and multicast group derived from the run id, so concurrent runs
 // do not hear each other; a large receive buffer because UDP loses big bursts otherwise.
-std::string run_lcm_url(int64_t run_id);
+// `ttl` is the multicast time-to-live: 0 keeps the run on this host, 1 reaches the hosts of the
+// local network (a run with participants on other machines, `cosim run --remote`).
+std::string run_lcm_url(int64_t run_id, int ttl = 0);
 
 // Decodes only the header of an encoded message of type `type_hash` (cheap for large chunks).
 bool peek_header(const void* data, int size, int64_t type_hash, cosim_msgs::header_t& header);

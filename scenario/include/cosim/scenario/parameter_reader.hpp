@@ -31,6 +31,12 @@ class SectionReader {
     value = key.required ? section_.integer(name, key.range)
                          : section_.integer(name, fallback, key.range);
   }
+  // Seeds: read as a non-negative int (the scenario's integers are ints).
+  void operator()(const Key& key, unsigned& value) {
+    int as_int = static_cast<int>(value);
+    (*this)(key, as_int);
+    value = static_cast<unsigned>(as_int);
+  }
   void operator()(const Key& key, bool& value) {
     if (!usable(key)) return;
     value = section_.flag(std::string(key.name),

@@ -121,6 +121,10 @@ struct Key {
       k.condition = when;
     });
   }
+  // How the key table shows a default that the reader sets from other values first.
+  Key shown_default(std::string_view text) const {
+    return with([&](Key& k) { k.default_text = text; });
+  }
   // The default of a scenario when it differs from the struct's own (text: how the table
   // shows it, empty for the number itself).
   Key scenario_default(double value, std::string_view text = {}) const {
@@ -177,6 +181,7 @@ class ParameterCheck {
   explicit ParameterCheck(std::string owner) : owner_(std::move(owner)) {}
   void operator()(const Key& key, const double& value) const { check(key, value); }
   void operator()(const Key& key, const int& value) const { check(key, value); }
+  void operator()(const Key& key, const unsigned& value) const { check(key, value); }
   void operator()(const Key&, const bool&) const {}
   void operator()(const Key& key, const Eigen::Vector3d& value) const {
     if (key.active && !value.allFinite()) fail(key.name, "expected finite numbers");
@@ -220,6 +225,9 @@ class KeyTable {
   explicit KeyTable(std::string prefix = {}) : prefix_(std::move(prefix)) {}
   void operator()(const Key& key, const double& value) { add(key, "number", number(key, value)); }
   void operator()(const Key& key, const int& value) { add(key, "integer", number(key, value)); }
+  void operator()(const Key& key, const unsigned& value) {
+    add(key, "integer", number(key, value));
+  }
   void operator()(const Key& key, const bool& value) {
     const bool shown = key.scenario_fallback ? *key.scenario_fallback != 0.0 : value;
     add(key, "flag", fallback(key, shown ? "true" : "false"), "true, false");
