@@ -296,8 +296,11 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
     if (seconds_since(last_check) >= 0.01 || !progressed) {
       last_check = Clock::now();
       for (const auto& exit : processes.poll_exits()) {
-        // Its last reports may still be on their way: take them before naming its window.
-        bus_->poll(0.02);
+        // Its last reports may still be on their way (on a loaded machine LCM's receive thread
+        // can lag the exit by tens of ms): take them until the bus has been quiet for 50 ms,
+        // at most 0.5 s, before naming its window.
+        const auto drain_start = Clock::now();
+        while (bus_->poll(0.05) && seconds_since(drain_start) < 0.5) take_statuses();
         take_statuses();
         std::string acts_as = exit.name;
         for (const auto& entry : scene_.participants) {
