@@ -129,28 +129,19 @@ TEST(Runs, AParticipantOnAnotherHostGivesTheSameResultAsOnOneHost) {
 
 TEST(Runs, ARemoteParticipantIsCheckedBeforeAnythingStarts) {
   const auto runs = fresh_folder("remote_refused");
-  const auto unknown = run_cosim(
-      fmt::format("run {} --runs-dir {} --quiet --remote nobody", blade(), runs.string()));
-  EXPECT_EQ(unknown.exit_code, 2);
-  EXPECT_NE(unknown.output.find("--remote 'nobody': this scene runs no participant 'nobody' (it "
-                                "runs prescribed_flow, vegetation_beam)"),
-            std::string::npos)
-      << unknown.output;
-  const auto private_network =
-      run_cosim(fmt::format("run {} --runs-dir {} --quiet --remote vegetation_beam --network "
-                            "private",
-                            blade(), runs.string()));
-  EXPECT_EQ(private_network.exit_code, 2);
-  EXPECT_NE(private_network.output.find("--network private cannot be combined with --remote"),
-            std::string::npos)
-      << private_network.output;
-  const auto faulty = run_cosim(fmt::format(
-      "run {} --runs-dir {} --quiet --remote vegetation_beam --fault vegetation_beam:exit@3",
-      blade(), runs.string()));
-  EXPECT_EQ(faulty.exit_code, 2);
-  EXPECT_NE(faulty.output.find("a fault can only be injected into a process this command starts"),
-            std::string::npos)
-      << faulty.output;
+  auto expect_refused = [&](const std::string& options, const std::string& message) {
+    const auto refused =
+        run_cosim(fmt::format("run {} --runs-dir {} --quiet {}", blade(), runs.string(), options));
+    EXPECT_EQ(refused.exit_code, 2) << options;
+    EXPECT_NE(refused.output.find(message), std::string::npos) << refused.output;
+  };
+  expect_refused("--remote nobody",
+                 "--remote 'nobody': this scene runs no participant 'nobody' (it runs "
+                 "prescribed_flow, vegetation_beam)");
+  expect_refused("--remote vegetation_beam --network private",
+                 "--network private cannot be combined with --remote");
+  expect_refused("--remote vegetation_beam --fault vegetation_beam:exit@3",
+                 "a fault can only be injected into a process this command starts");
   EXPECT_TRUE(std::filesystem::is_empty(runs)) << "no run folder for a refused run";
   // Nobody types the join line: the run names the participant it waited for.
   const auto never_joined = run_cosim(

@@ -1,13 +1,12 @@
 #include "join_command.hpp"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "cosim/coupler/process_group.hpp"
@@ -19,14 +18,11 @@ namespace cosim::tool {
 
 void join_run(const JoinRequest& request) {
   const auto scene = load_with_overrides(request.scenario, {});
-  const auto entry = std::find_if(scene.participants.begin(), scene.participants.end(),
-                                  [&](const auto& e) { return e.name == request.name; });
-  if (entry == scene.participants.end()) {
-    std::vector<std::string> names;
-    for (const auto& e : scene.participants) names.push_back(e.name);
-    throw std::invalid_argument(fmt::format("--name '{}': {} runs no such participant (it runs {})",
-                                            request.name, request.scenario.string(),
-                                            fmt::join(names, ", ")));
+  const auto* entry = find_participant(scene, request.name);
+  if (!entry) {
+    throw std::invalid_argument(fmt::format("--name '{}' ({}): {}", request.name,
+                                            request.scenario.string(),
+                                            no_participant(scene, request.name)));
   }
   if (request.url.rfind("udpm://", 0) != 0 || request.url.find("ttl=0") != std::string::npos) {
     throw std::invalid_argument(fmt::format(

@@ -113,16 +113,10 @@ void check_fault(const scenario::Scene& scene, const std::string& name, const st
   auto refuse = [&](const std::string& problem) {
     throw std::invalid_argument(fmt::format("--fault '{}': {}", given, problem));
   };
-  bool known = false;
-  std::vector<std::string> names;
-  for (const auto& entry : scene.participants) {
-    known |= entry.name == name || entry.acts_as == name;
-    names.push_back(entry.name);
-  }
-  if (!known) {
-    refuse(fmt::format("this scene runs no participant '{}' (it runs {})", name,
-                       fmt::join(names, ", ")));
-  }
+  const bool known =
+      std::any_of(scene.participants.begin(), scene.participants.end(),
+                  [&](const auto& entry) { return entry.name == name || entry.acts_as == name; });
+  if (!known) refuse(no_participant(scene, name));
   const auto at = spec.find('@');
   if (at == std::string::npos)
     refuse("expected PARTICIPANT:KIND@WINDOW, e.g. vegetation_beam:exit@5");
@@ -145,7 +139,9 @@ void check_fault(const scenario::Scene& scene, const std::string& name, const st
   }
 }
 
-bool is_remote(const RunRequest& request, const std::string& name);
+bool is_remote(const RunRequest& request, const std::string& name) {
+  return std::find(request.remote.begin(), request.remote.end(), name) != request.remote.end();
+}
 
 void check_executables(const scenario::Scene& scene, const RunRequest& request) {
   const auto bin = coupler::executable_dir();
@@ -174,14 +170,8 @@ void check_remote(const scenario::Scene& scene, const RunRequest& request) {
     const auto refuse = [&](const std::string& problem) {
       throw std::invalid_argument(fmt::format("--remote '{}': {}", name, problem));
     };
-    const auto entry = std::find_if(scene.participants.begin(), scene.participants.end(),
-                                    [&](const auto& e) { return e.name == name; });
-    if (entry == scene.participants.end()) {
-      std::vector<std::string> names;
-      for (const auto& e : scene.participants) names.push_back(e.name);
-      refuse(fmt::format("this scene runs no participant '{}' (it runs {})", name,
-                         fmt::join(names, ", ")));
-    }
+    const auto* entry = find_participant(scene, name);
+    if (!entry) refuse(no_participant(scene, name));
     if (std::find(seen.begin(), seen.end(), name) != seen.end()) refuse("given twice");
     seen.push_back(name);
     if (request.faults.contains(entry->name) || request.faults.contains(entry->acts_as)) {
@@ -194,10 +184,6 @@ void check_remote(const scenario::Scene& scene, const RunRequest& request) {
   }
 }
 
-bool is_remote(const RunRequest& request, const std::string& name) {
-  return std::find(request.remote.begin(), request.remote.end(), name) != request.remote.end();
-}
-
 // What to type on the other host: `cosim join` with this run's address and scenario.
 std::string join_command(const std::filesystem::path& run_dir, const std::string& name,
                          const std::string& url, int64_t run_id) {
@@ -206,6 +192,20 @@ std::string join_command(const std::filesystem::path& run_dir, const std::string
 }
 
 }  // namespace
+
+const scenario::ParticipantEntry* find_participant(const scenario::Scene& scene,
+                                                   const std::string& name) {
+  for (const auto& entry : scene.participants)
+    if (entry.name == name) return &entry;
+  return nullptr;
+}
+
+std::string no_participant(const scenario::Scene& scene, const std::string& name) {
+  std::vector<std::string> names;
+  for (const auto& entry : scene.participants) names.push_back(entry.name);
+  return fmt::format("this scene runs no participant '{}' (it runs {})", name,
+                     fmt::join(names, ", "));
+}
 
 const std::vector<std::string>& fault_kinds() {
   static const std::vector<std::string> kinds{"exit", "hang", "throw"};

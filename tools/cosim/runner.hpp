@@ -41,6 +41,12 @@ struct RunOutcome {
   int interrupted_by = 0;  // SIGINT or SIGTERM when the run was interrupted, else 0
 };
 
+// The scene's participant whose section is `name`, or nullptr; and the words for its absence,
+// "this scene runs no participant 'x' (it runs a, b)".
+const scenario::ParticipantEntry* find_participant(const scenario::Scene& scene,
+                                                   const std::string& name);
+std::string no_participant(const scenario::Scene& scene, const std::string& name);
+
 // The fault kinds a participant process can inject (coupler/process_main.cpp).
 const std::vector<std::string>& fault_kinds();
 

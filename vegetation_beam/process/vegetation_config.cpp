@@ -20,16 +20,14 @@ void parse_plant_group(scenario::Section& group, const BeamParameters& parameter
   scenario::read_parameters(group, spec);  // the keys declared in plant_field.hpp
   PlantRow row;
   scenario::read_parameters(group, row);  // section_keys.hpp
-  const int count = row.count;
-  const Eigen::Vector3d spacing = row.spacing;
-  const double nodes = static_cast<double>(count) * (spec.links + 1.0);
-  memory.add(group, count > 1 ? "count" : "links", estimated_memory_bytes(count, nodes),
-             fmt::format("{} plants x {} links: {:.3g} nodes x {:g} B", count, spec.links, nodes,
-                         kBytesPerPlantNode));
-  parse_plant_checks(group, spec, parameters, static_cast<int>(plants.size()), count, checks);
-  for (int i = 0; i < count; ++i) {
+  const double nodes = static_cast<double>(row.count) * (spec.links + 1.0);
+  memory.add(group, row.count > 1 ? "count" : "links", estimated_memory_bytes(row.count, nodes),
+             fmt::format("{} plants x {} links: {:.3g} nodes x {:g} B", row.count, spec.links,
+                         nodes, kBytesPerPlantNode));
+  parse_plant_checks(group, spec, parameters, static_cast<int>(plants.size()), row.count, checks);
+  for (int i = 0; i < row.count; ++i) {
     PlantSpec plant = spec;
-    plant.base = spec.base + i * spacing;
+    plant.base = spec.base + i * row.spacing;
     plants.push_back(plant);
   }
 }
