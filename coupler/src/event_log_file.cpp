@@ -9,6 +9,9 @@
 #include <cerrno>
 #include <cstring>
 
+#include "cosim/coupler/bus.hpp"
+#include "field_columns.hpp"
+
 namespace cosim::coupler {
 namespace {
 
@@ -23,7 +26,12 @@ constexpr uint32_t kIndexMagic = 0x184D2A51u;
 constexpr uint32_t kZstdMagic = 0xFD2FB528u;
 constexpr std::array<char, 4> kBlockTag{'C', 'S', 'L', 'B'};
 constexpr std::array<char, 4> kIndexTag{'C', 'S', 'L', 'I'};
-constexpr uint32_t kFormatVersion = 1;
+// Version 1: a block holds plain LCM events. Version 2: a block holds the size of its events
+// section, the events (each led by a byte: 0 verbatim, 1 a field chunk whose values are in
+// column u32 that follows), then the field columns (field_columns.hpp).
+constexpr uint32_t kFormatVersion = 2;
+constexpr uint8_t kVerbatimEvent = 0;
+constexpr uint8_t kColumnEvent = 1;
 constexpr std::size_t kBlockPayload = 4 + 4 + 5 * 8;  // tag, version, five 64-bit fields
 constexpr std::size_t kIndexEntry = 6 * 8;
 
@@ -77,7 +85,7 @@ EventLogBlock get_block_fields(const uint8_t* in, bool with_offset) {
 // ---- writer ----
 
 EventLogWriter::EventLogWriter(const std::filesystem::path& file, int compression_level)
-    : file_(file), level_(compression_level) {
+    : file_(file), level_(compression_level), columns_(std::make_unique<FieldColumnWriter>()) {
   out_ = std::fopen(file.c_str(), "wb");
   if (!out_) {
     throw std::runtime_error(
@@ -115,26 +123,36 @@ void EventLogWriter::append(const std::string& channel, const void* data, std::s
     pending_.first_event = event_number_;
   }
   pending_.last_window = std::max(pending_.last_window, window);
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  std::size_t kept = size;
+  const std::optional<uint32_t> column =
+      channel == kFieldChannel ? columns_->take(bytes, size, kept) : std::nullopt;
+  block_.push_back(column ? kColumnEvent : kVerbatimEvent);
+  if (column) put_le(block_, *column, 4);
   put_be(block_, kLcmSync, 4);
   put_be(block_, static_cast<uint64_t>(event_number_++), 8);
   put_be(block_, static_cast<uint64_t>(utime), 8);
   put_be(block_, channel.size(), 4);
-  put_be(block_, size, 4);
+  put_be(block_, kept, 4);
   block_.insert(block_.end(), channel.begin(), channel.end());
-  const auto* bytes = static_cast<const uint8_t*>(data);
-  block_.insert(block_.end(), bytes, bytes + size);
+  block_.insert(block_.end(), bytes, bytes + kept);
   raw_bytes_ += kLcmEventHeader + channel.size() + size;
-  if (block_.size() >= kBlockBytes) flush_block();
+  if (block_.size() + columns_->value_bytes() >= kBlockBytes) flush_block();
 }
 
 void EventLogWriter::flush_block() {
   if (block_.empty()) return;
-  std::vector<uint8_t> compressed(ZSTD_compressBound(block_.size()));
+  std::vector<uint8_t> raw;
+  raw.reserve(4 + block_.size() + columns_->value_bytes() + 1024);
+  put_le(raw, block_.size(), 4);
+  raw.insert(raw.end(), block_.begin(), block_.end());
+  columns_->encode(raw);
+  std::vector<uint8_t> compressed(ZSTD_compressBound(raw.size()));
   ZSTD_CCtx* context = ZSTD_createCCtx();
   ZSTD_CCtx_setParameter(context, ZSTD_c_compressionLevel, level_);
   ZSTD_CCtx_setParameter(context, ZSTD_c_checksumFlag, 1);  // damage shows as a checksum error
   const std::size_t written =
-      ZSTD_compress2(context, compressed.data(), compressed.size(), block_.data(), block_.size());
+      ZSTD_compress2(context, compressed.data(), compressed.size(), raw.data(), raw.size());
   ZSTD_freeCCtx(context);
   if (ZSTD_isError(written)) {
     throw std::runtime_error(fmt::format("cannot compress the event log {}: {}", file_.string(),
@@ -142,7 +160,7 @@ void EventLogWriter::flush_block() {
   }
   pending_.offset = file_offset_;
   pending_.compressed_size = written;
-  pending_.raw_size = block_.size();
+  pending_.raw_size = raw.size();
   std::vector<uint8_t> header;
   put_le(header, kBlockHeaderMagic, 4);
   put_le(header, kBlockPayload, 4);
@@ -185,7 +203,8 @@ void EventLogWriter::close() {
 
 // ---- reader ----
 
-EventLogReader::EventLogReader(const std::filesystem::path& file) : file_(file) {
+EventLogReader::EventLogReader(const std::filesystem::path& file)
+    : file_(file), columns_(std::make_unique<FieldColumnReader>()) {
   in_ = std::fopen(file.c_str(), "rb");
   if (!in_) {
     throw EventLogError(
@@ -236,8 +255,11 @@ bool EventLogReader::load_block(uint64_t offset) {
   if (std::fread(payload.data(), 1, payload.size(), in_) != payload.size()) {
     damaged(offset, "the file ends inside a block header (the run was cut short?)");
   }
-  if (!has_tag(payload.data(), kBlockTag) || get_le(payload.data() + 4, 4) != kFormatVersion) {
-    damaged(offset, "block header of an unknown format version");
+  const uint64_t version = get_le(payload.data() + 4, 4);
+  if (!has_tag(payload.data(), kBlockTag) || version < 1 || version > kFormatVersion) {
+    damaged(offset, fmt::format("block header of an unknown format version ({}; this build reads "
+                                "1-{})",
+                                version, kFormatVersion));
   }
   const EventLogBlock block = get_block_fields(payload.data() + 8, false);
   const uint64_t data_offset = offset + 8 + kBlockPayload;
@@ -262,20 +284,53 @@ bool EventLogReader::load_block(uint64_t offset) {
   block_cursor_ = 0;
   block_offset_ = data_offset;
   next_block_offset_ = data_offset + block.compressed_size;
+  block_version_ = static_cast<int>(version);
+  columns_->clear();
+  if (block_version_ >= 2) {
+    // The events section, then the field columns of its chunks.
+    const std::size_t events = block_.size() < 4 ? SIZE_MAX : get_le(block_.data(), 4);
+    if (events > block_.size() - 4) {
+      damaged(data_offset, fmt::format("block of windows {}-{}: its events section overruns it",
+                                       block.first_window, block.last_window));
+    }
+    try {
+      columns_->decode(block_.data() + 4 + events, block_.size() - 4 - events);
+    } catch (const std::runtime_error& error) {
+      damaged(data_offset, fmt::format("block of windows {}-{}: {}", block.first_window,
+                                       block.last_window, error.what()));
+    }
+    block_cursor_ = 4;
+    block_end_ = 4 + events;
+  } else {
+    block_end_ = block_.size();
+  }
   return true;
 }
 
 std::optional<LoggedEvent> EventLogReader::next() {
   if (!compressed_) return next_plain();
-  while (block_cursor_ >= block_.size()) {
+  while (block_cursor_ >= block_end_) {
     if (!load_block(next_block_offset_)) return std::nullopt;
   }
   // damaged() names the block's byte offset; say how far into its events the damage lies.
-  const auto at = [&](const char* what) {
+  const auto at = [&](const std::string& what) {
     damaged(block_offset_,
             fmt::format("{} bytes into the block's events: {}", block_cursor_, what));
   };
-  if (block_.size() - block_cursor_ < kLcmEventHeader) {
+  std::optional<uint32_t> column;
+  if (block_version_ >= 2) {
+    const uint8_t kind = block_[block_cursor_];
+    if (kind == kColumnEvent) {
+      if (block_end_ - block_cursor_ < 5) at("a cut event");
+      column = static_cast<uint32_t>(get_le(block_.data() + block_cursor_ + 1, 4));
+      block_cursor_ += 5;
+    } else if (kind == kVerbatimEvent) {
+      block_cursor_ += 1;
+    } else {
+      at(fmt::format("unknown event kind {}", kind));
+    }
+  }
+  if (block_end_ - block_cursor_ < kLcmEventHeader) {
     at("a cut event");
   }
   const uint8_t* p = block_.data() + block_cursor_;
@@ -287,12 +342,19 @@ std::optional<LoggedEvent> EventLogReader::next() {
   event.timestamp = static_cast<int64_t>(get_be(p + 12, 8));
   const std::size_t channel_length = get_be(p + 20, 4);
   const std::size_t data_length = get_be(p + 24, 4);
-  if (block_.size() - block_cursor_ - kLcmEventHeader < channel_length + data_length) {
+  if (block_end_ - block_cursor_ - kLcmEventHeader < channel_length + data_length) {
     at("a cut event");
   }
   p += kLcmEventHeader;
   event.channel.assign(reinterpret_cast<const char*>(p), channel_length);
   event.data.assign(p + channel_length, p + channel_length + data_length);
+  if (column) {
+    try {
+      columns_->restore(*column, event.data);
+    } catch (const std::runtime_error& error) {
+      at(error.what());
+    }
+  }
   block_cursor_ += kLcmEventHeader + channel_length + data_length;
   return event;
 }
@@ -380,7 +442,34 @@ void EventLogReader::seek_window(int64_t window) {
   const uint64_t offset = all.empty() ? 0 : (found != all.end() ? found : all.end() - 1)->offset;
   block_.clear();
   block_cursor_ = 0;
+  block_end_ = 0;
   next_block_offset_ = offset;
+}
+
+int64_t write_lcm_log(EventLogReader& log, const std::filesystem::path& file) {
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> out(std::fopen(file.c_str(), "wb"),
+                                                            &std::fclose);
+  const auto fail = [&](int cause) {
+    throw std::runtime_error(
+        fmt::format("cannot write {}: {}", file.string(), std::strerror(cause ? cause : EIO)));
+  };
+  if (!out) fail(errno);
+  int64_t count = 0;
+  std::vector<uint8_t> record;
+  while (const auto event = log.next()) {  // a damaged log throws EventLogError from here
+    record.clear();
+    put_be(record, kLcmSync, 4);
+    put_be(record, static_cast<uint64_t>(event->number), 8);
+    put_be(record, static_cast<uint64_t>(event->timestamp), 8);
+    put_be(record, event->channel.size(), 4);
+    put_be(record, event->data.size(), 4);
+    record.insert(record.end(), event->channel.begin(), event->channel.end());
+    record.insert(record.end(), event->data.begin(), event->data.end());
+    if (std::fwrite(record.data(), 1, record.size(), out.get()) != record.size()) fail(errno);
+    ++count;
+  }
+  if (std::fflush(out.get()) != 0) fail(errno);
+  return count;
 }
 
 std::optional<std::filesystem::path> find_event_log(const std::filesystem::path& run_dir) {

@@ -17,7 +17,6 @@
 #include <thread>
 
 #include "command.hpp"
-#include "cosim/coupler/event_log_file.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/replay/recording.hpp"
 #include "cosim/scenario/section.hpp"
@@ -438,26 +437,6 @@ std::size_t record_offset(const std::string& log, int index) {
   return offset;
 }
 
-// The events of a compressed log as a plain LCM log (what `zstd -d` gives, and what runs recorded
-// before compression hold).
-std::string plain_log(const std::filesystem::path& compressed) {
-  coupler::EventLogReader reader(compressed);
-  std::string out;
-  auto be = [&](uint64_t value, int bytes) {
-    for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<char>(value >> (8 * i)));
-  };
-  while (const auto event = reader.next()) {
-    be(0xEDA1DA01u, 4);
-    be(static_cast<uint64_t>(event->number), 8);
-    be(static_cast<uint64_t>(event->timestamp), 8);
-    be(event->channel.size(), 4);
-    be(event->data.size(), 4);
-    out += event->channel;
-    out.append(reinterpret_cast<const char*>(event->data.data()), event->data.size());
-  }
-  return out;
-}
-
 TEST(Runs, ReplayNamesTheDamageOfACorruptedOrTruncatedLog) {
   const auto runs = fresh_folder("replay-damaged");
   const auto recorded =
@@ -486,10 +465,18 @@ TEST(Runs, ReplayNamesTheDamageOfACorruptedOrTruncatedLog) {
   EXPECT_NE(cut.exit_code, 0);
   EXPECT_NE(cut.output.find("cut short"), std::string::npos) << cut.output;
   std::ofstream(compressed, std::ios::binary | std::ios::trunc) << packed;
-  // Plain (an older run): the record-by-record reader names byte and record.
-  const std::string log = plain_log(compressed);
-  std::filesystem::remove(compressed);
+  // Plain (an older run, or one exported with `cosim export-log`): the record-by-record reader
+  // names byte and record.
+  const auto exported = run_cosim(fmt::format("export-log {}", run_dir.string()));
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
   const auto log_file = run_dir / "events.lcmlog";
+  std::string log;
+  {
+    std::ifstream in(log_file, std::ios::binary);
+    log.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(log.size(), 0u) << exported.output;
+  std::filesystem::remove(compressed);
   auto replay_with = [&](const std::string& bytes) {
     std::ofstream(log_file, std::ios::binary | std::ios::trunc) << bytes;
     return run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "cosim/coupler/event_log_file.hpp"
 #include "cosim_version.hpp"
 #include "join_command.hpp"
 #include "keys_command.hpp"
@@ -180,6 +181,15 @@ int main(int argc, char** argv) {
       ->required();
   add_run_options(replay_command);
 
+  std::filesystem::path export_run, export_file;
+  auto* export_command = app.add_subcommand(
+      "export-log", "write a run's event log as a plain LCM log (lcm-logger's format)");
+  export_command->add_option("run_dir", export_run, "a run folder")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  export_command->add_option("-o,--output", export_file,
+                             "the .lcmlog to write (default: events.lcmlog in the run folder)");
+
   tool::add_keys_command(app);  // cosim keys [participant]: the key reference
   tool::JoinRequest join;
   auto* join_command = tool::add_join_command(app, join);
@@ -221,6 +231,23 @@ int main(int argc, char** argv) {
       return outcome.exit_code;
     }
     if (join_command->parsed()) tool::join_run(join);
+    if (export_command->parsed()) {
+      const auto log = coupler::find_event_log(export_run);
+      if (!log) {
+        throw std::invalid_argument(
+            fmt::format("{} has no event log (events.lcmlog.zst): was it run with --record none?",
+                        export_run.string()));
+      }
+      if (export_file.empty()) export_file = export_run / "events.lcmlog";
+      if (std::filesystem::exists(export_file) && std::filesystem::equivalent(*log, export_file)) {
+        fmt::print("{} is already a plain LCM log\n", log->string());
+        return 0;
+      }
+      coupler::EventLogReader reader(*log);
+      const int64_t events = coupler::write_lcm_log(reader, export_file);
+      fmt::print("{} events written to {}\n", events, export_file.string());
+      return 0;
+    }
     if (plot_command->parsed()) {
       std::vector<std::string> notes;
       const auto files = tool::plot_run(plot_dir, notes);

@@ -1,15 +1,18 @@
 // The event log on disk: LCM log events (the byte format of lcm-logger) in zstd-compressed
-// blocks, so a run's traffic takes a fraction of its raw size and `zstd -d` still turns the file
-// into a plain .lcmlog that LCM's own tools read.
+// blocks, with the values of the field chunks taken out into predicted, byte-planed columns
+// (field_columns.hpp), so a run's traffic takes a fraction of its raw size. write_lcm_log()
+// (`cosim export-log`) turns it back into a plain .lcmlog that LCM's own tools read.
 //
-// Layout (every part a zstd frame, so the file is a valid .zst stream):
-//   per block: a skippable frame "block header" (tag, compressed and raw size, first and last
-//              coupling window, first event number) followed by one zstd frame with a content
-//              checksum holding whole events;
+// Layout (every part a zstd frame, so `zstd -t` checks the file):
+//   per block: a skippable frame "block header" (tag, format version, compressed and raw size,
+//              first and last coupling window, first event number) followed by one zstd frame
+//              with a content checksum holding whole events: in format 1 plain LCM events, in
+//              format 2 the size of the events section, the events (each led by a kind byte,
+//              and a column number when its values are in the columns), then the columns;
 //   at the end: a skippable frame "index" listing each block's file offset and windows.
 // A reader streams block by block from the headers alone (a run cut short, without its index,
 // stays readable up to its last whole block), and seeks to a window through the index.
-// Plain .lcmlog files (runs recorded before compression, or decompressed ones) are read too.
+// Plain .lcmlog files (runs recorded before compression, or exported ones) are read too.
 #pragma once
 
 #include <cstdint>
@@ -44,6 +47,9 @@ struct EventLogBlock {
   int64_t first_event = 0;
 };
 
+class FieldColumnWriter;
+class FieldColumnReader;
+
 class EventLogWriter {
  public:
   // Raw bytes gathered before a block is compressed and written; larger blocks compress better,
@@ -75,6 +81,7 @@ class EventLogWriter {
   std::FILE* out_ = nullptr;
   std::vector<uint8_t> block_;
   std::vector<EventLogBlock> index_;
+  std::unique_ptr<FieldColumnWriter> columns_;  // the field chunks' values of the block
   EventLogBlock pending_;
   int64_t event_number_ = 0;
   uint64_t raw_bytes_ = 0, file_offset_ = 0;
@@ -110,13 +117,19 @@ class EventLogReader {
   std::FILE* in_ = nullptr;
   uint64_t file_size_ = 0;
   bool compressed_ = false;
-  std::vector<uint8_t> block_;  // decompressed events of the current block
-  std::size_t block_cursor_ = 0;
+  std::vector<uint8_t> block_;                    // the current block, decompressed
+  std::size_t block_cursor_ = 0, block_end_ = 0;  // next event, end of the events section
+  int block_version_ = 0;
+  std::unique_ptr<FieldColumnReader> columns_;
   uint64_t block_offset_ = 0, next_block_offset_ = 0;
   std::vector<EventLogBlock> blocks_;
   bool blocks_known_ = false;
   uint64_t plain_offset_ = 0;
 };
+
+// Writes every event of `log` (from where it stands) to `file` as a plain LCM log, the format of
+// lcm-logger; returns the number of events. Throws naming the file and the cause.
+int64_t write_lcm_log(EventLogReader& log, const std::filesystem::path& file);
 
 // The run's event log file in `run_dir`: events.lcmlog.zst, or events.lcmlog for runs recorded
 // before compression; nothing when neither exists.
