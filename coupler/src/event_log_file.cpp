@@ -19,6 +19,7 @@ namespace {
 // channel and data lengths, then the channel name and the data.
 constexpr uint32_t kLcmSync = 0xEDA1DA01u;
 constexpr std::size_t kLcmEventHeader = 4 + 8 + 8 + 4 + 4;
+constexpr std::size_t kMaxChannelBytes = 256;  // LCM allows 63; anything larger is damage
 // zstd skippable frames: magic 0x184D2A5? (little-endian), payload size, payload. Decoders that
 // do not know them skip them, so `zstd -d` leaves only the events.
 constexpr uint32_t kBlockHeaderMagic = 0x184D2A50u;
@@ -308,7 +309,21 @@ bool EventLogReader::load_block(uint64_t offset) {
 }
 
 std::optional<LoggedEvent> EventLogReader::next() {
-  if (!compressed_) return next_plain();
+  auto event = compressed_ ? next_compressed() : next_plain();
+  // Events are numbered from 0 in file order: a gap is a lost record, not a quiet skip.
+  if (event && event->number != expected_number_) {
+    const std::string record =
+        compressed_ ? std::string() : fmt::format(" (record {})", plain_record_ - 1);
+    throw EventLogError(
+        fmt::format("event log {} is damaged at byte {}{}: event number {} where "
+                    "{} was expected (records missing or out of order)",
+                    file_.string(), event_offset_, record, event->number, expected_number_));
+  }
+  if (event) expected_number_ = event->number + 1;
+  return event;
+}
+
+std::optional<LoggedEvent> EventLogReader::next_compressed() {
   while (block_cursor_ >= block_end_) {
     if (!load_block(next_block_offset_)) return std::nullopt;
   }
@@ -356,32 +371,53 @@ std::optional<LoggedEvent> EventLogReader::next() {
     }
   }
   block_cursor_ += kLcmEventHeader + channel_length + data_length;
+  event_offset_ = block_offset_;
   return event;
 }
 
+// Record by record. LCM's own reader skips garbage silently, hunting for the next marker, and
+// stops quietly at a truncated record; a replay must not compare against a recording with holes
+// in it, so every inconsistency is an error naming the byte and the record.
 std::optional<LoggedEvent> EventLogReader::next_plain() {
   if (plain_offset_ == file_size_) return std::nullopt;
+  const auto at = [&](const std::string& what) {
+    throw EventLogError(fmt::format("event log {} is damaged at byte {} (record {}): {}",
+                                    file_.string(), plain_offset_, plain_record_, what));
+  };
+  const uint64_t left = file_size_ - plain_offset_;
+  if (left < kLcmEventHeader) {
+    at(fmt::format("the file ends {} bytes into a {}-byte record header (truncated)", left,
+                   kLcmEventHeader));
+  }
   std::array<uint8_t, kLcmEventHeader> header{};
   std::fseek(in_, static_cast<long>(plain_offset_), SEEK_SET);
-  if (std::fread(header.data(), 1, header.size(), in_) != header.size()) {
-    damaged(plain_offset_, "the file ends inside an event header");
+  if (std::fread(header.data(), 1, header.size(), in_) != header.size()) at("read error");
+  const auto marker = static_cast<uint32_t>(get_be(header.data(), 4));
+  if (marker != kLcmSync) {
+    at(fmt::format("expected the record marker 0x{:08X}, found 0x{:08X}", kLcmSync, marker));
   }
-  if (get_be(header.data(), 4) != kLcmSync) damaged(plain_offset_, "no event sync word");
   LoggedEvent event;
   event.number = static_cast<int64_t>(get_be(header.data() + 4, 8));
   event.timestamp = static_cast<int64_t>(get_be(header.data() + 12, 8));
   const std::size_t channel_length = get_be(header.data() + 20, 4);
   const std::size_t data_length = get_be(header.data() + 24, 4);
-  if (file_size_ - plain_offset_ - kLcmEventHeader < channel_length + data_length) {
-    damaged(plain_offset_, "the file ends inside an event");
+  if (channel_length == 0 || channel_length > kMaxChannelBytes || data_length > INT32_MAX) {
+    at(fmt::format("impossible lengths in the record header (channel {} bytes, data {} bytes)",
+                   channel_length, data_length));
+  }
+  if (left - kLcmEventHeader < channel_length + data_length) {
+    at(
+        fmt::format("the header announces {} bytes of channel and data, the file has {} left "
+                    "(truncated)",
+                    channel_length + data_length, left - kLcmEventHeader));
   }
   std::vector<uint8_t> body(channel_length + data_length);
-  if (std::fread(body.data(), 1, body.size(), in_) != body.size()) {
-    damaged(plain_offset_, "read error");
-  }
+  if (std::fread(body.data(), 1, body.size(), in_) != body.size()) at("read error");
   event.channel.assign(body.begin(), body.begin() + static_cast<long>(channel_length));
   event.data.assign(body.begin() + static_cast<long>(channel_length), body.end());
+  event_offset_ = plain_offset_;
   plain_offset_ += kLcmEventHeader + body.size();
+  ++plain_record_;
   return event;
 }
 
@@ -433,6 +469,8 @@ const std::vector<EventLogBlock>& EventLogReader::blocks() {
 void EventLogReader::seek_window(int64_t window) {
   if (!compressed_) {
     plain_offset_ = 0;  // plain logs have no index: read from the start
+    plain_record_ = 0;
+    expected_number_ = 0;
     return;
   }
   // The first block reaching `window`, else the last one.
@@ -444,6 +482,8 @@ void EventLogReader::seek_window(int64_t window) {
   block_cursor_ = 0;
   block_end_ = 0;
   next_block_offset_ = offset;
+  // The block's first event comes next (or the first one, without blocks).
+  expected_number_ = all.empty() ? 0 : (found != all.end() ? found : all.end() - 1)->first_event;
 }
 
 int64_t write_lcm_log(EventLogReader& log, const std::filesystem::path& file) {

@@ -2,6 +2,7 @@
 // columns too), the file is a valid zstd stream and exports to a plain LCM log, logs of the
 // first format still read, seeking by window uses the index (or the block headers when the index
 // is missing), and damage or a full disk is named with the file and byte offset.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <zstd.h>
 #include <lcm/lcm-cpp.hpp>
@@ -328,6 +329,42 @@ TEST(EventLogFile, ACorruptedByteIsNamedWithItsBlock) {
     EXPECT_NE(what.find("damaged at byte"), std::string::npos) << what;
     EXPECT_NE(what.find("windows 0-"), std::string::npos) << what;
   }
+}
+
+// A plain log is read record by record and every inconsistency is named with byte and record:
+// LCM's own reader would skip the garbage or stop quietly, and a replay would trust the rest.
+TEST(EventLogFile, APlainLogNamesAWrongMarkerAGapAndACutWithByteAndRecord) {
+  const auto events = samples(10, 3);
+  const auto plain = plain_lcm_log(events);
+  const auto read_all = [&](const std::vector<uint8_t>& bytes) -> std::string {
+    const fs::path file = temporary("strict.lcmlog");
+    std::ofstream(file, std::ios::binary | std::ios::trunc)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<long>(bytes.size()));
+    EventLogReader reader(file);
+    try {
+      while (reader.next()) {
+      }
+    } catch (const EventLogError& error) {
+      return error.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(read_all(plain), "");
+  const std::size_t second = 28 + events[0].channel.size() + events[0].data.size();
+  auto marker = plain;
+  marker[second] = 'J';
+  EXPECT_NE(read_all(marker).find(fmt::format("damaged at byte {} (record 1): expected the record "
+                                              "marker 0xEDA1DA01, found 0x4AA1DA01",
+                                              second)),
+            std::string::npos)
+      << read_all(marker);
+  auto gap = plain;
+  gap[second + 11] = 7;  // event number 7 where 1 belongs
+  EXPECT_NE(read_all(gap).find("(record 1): event number 7 where 1 was expected"),
+            std::string::npos)
+      << read_all(gap);
+  const std::vector<uint8_t> cut(plain.begin(), plain.end() - 5);
+  EXPECT_NE(read_all(cut).find("(truncated)"), std::string::npos) << read_all(cut);
 }
 
 TEST(EventLogFile, NotAnEventLogIsRefused) {

@@ -488,7 +488,7 @@ TEST(Runs, ReplayNamesTheDamageOfACorruptedOrTruncatedLog) {
   const auto damaged = replay_with(corrupted);
   EXPECT_NE(damaged.exit_code, 0);
   EXPECT_NE(damaged.output.find(fmt::format(
-                "events.lcmlog: damaged at byte {} (record 40): expected the record marker "
+                "events.lcmlog is damaged at byte {} (record 40): expected the record marker "
                 "0xEDA1DA01, found 0x4A554E4B",
                 at)),
             std::string::npos)

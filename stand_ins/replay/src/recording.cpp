@@ -22,7 +22,7 @@ struct Assembly {
   int32_t received_count = 0;
 };
 
-// One record of an LCM event log file as stored, with where it was found.
+// One event of the log, with where it was found.
 struct StoredEvent {
   int64_t record = 0;   // position in the file, from 0
   uint64_t offset = 0;  // byte offset of its header
@@ -30,102 +30,26 @@ struct StoredEvent {
   std::vector<uint8_t> data;
 };
 
-constexpr uint32_t kRecordMarker = 0xEDA1DA01;  // LCM's per-record magic number
-constexpr std::size_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;
-constexpr int32_t kMaxChannelBytes = 256;  // LCM allows 63; anything larger is damage
-
-uint64_t big_endian(const uint8_t* bytes, int count) {
-  uint64_t value = 0;
-  for (int i = 0; i < count; ++i) value = (value << 8) | bytes[i];
-  return value;
-}
-
 [[noreturn]] void damaged(const std::filesystem::path& log, int64_t record, uint64_t offset,
                           const std::string& problem) {
   throw std::runtime_error(
       fmt::format("{}: damaged at byte {} (record {}): {}", log.string(), offset, record, problem));
 }
 
-// Reads the log record by record. LCM's own reader skips garbage silently, hunting for the next
-// marker, and stops quietly at a truncated record; a replay must not compare against a
-// recording with holes in it, so every inconsistency is an error naming the byte and record.
+// Every event of the log, compressed or plain. The reader checks each block's checksum, every
+// record header and the event numbers, and names damage by byte offset (EventLogError).
 template <class Visitor>
 void for_each_event(const std::filesystem::path& event_log, Visitor&& visit) {
-  if (coupler::EventLogReader probe(event_log); probe.compressed()) {
-    // zstd blocks: the reader checks each block's checksum and names damage by byte offset.
-    StoredEvent event;
-    for (int64_t record = 0;; ++record) {
-      auto next = probe.next();
-      if (!next) return;
-      if (next->number != record) {
-        damaged(event_log, record, probe.block_offset(),
-                fmt::format("event number {} where {} was expected (records missing or out of "
-                            "order)",
-                            next->number, record));
-      }
-      event.record = record;
-      event.offset = probe.block_offset();
-      event.channel = std::move(next->channel);
-      event.data = std::move(next->data);
-      visit(event);
-    }
+  if (!std::filesystem::exists(event_log)) {
+    throw std::runtime_error(fmt::format("{}: no such event log", event_log.string()));
   }
-  std::error_code error;
-  const auto size = std::filesystem::file_size(event_log, error);
-  if (error) {
-    throw std::runtime_error(
-        fmt::format("{}: no such event log ({})", event_log.string(), error.message()));
-  }
-  std::ifstream in(event_log, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read", event_log.string()));
-  uint64_t offset = 0;
+  coupler::EventLogReader reader(event_log);
   StoredEvent event;
-  for (int64_t record = 0; offset < size; ++record) {
-    const uint64_t left = size - offset;
-    if (left < kHeaderBytes) {
-      damaged(event_log, record, offset,
-              fmt::format("the file ends {} bytes into a {}-byte record header (truncated)", left,
-                          kHeaderBytes));
-    }
-    uint8_t header[kHeaderBytes];
-    in.read(reinterpret_cast<char*>(header), kHeaderBytes);
-    if (!in) damaged(event_log, record, offset, "read failed");
-    const auto marker = static_cast<uint32_t>(big_endian(header, 4));
-    if (marker != kRecordMarker) {
-      damaged(event_log, record, offset,
-              fmt::format("expected the record marker 0x{:08X}, found 0x{:08X}", kRecordMarker,
-                          marker));
-    }
-    const auto number = static_cast<int64_t>(big_endian(header + 4, 8));
-    const auto channel_bytes = static_cast<int32_t>(big_endian(header + 20, 4));
-    const auto data_bytes = static_cast<int32_t>(big_endian(header + 24, 4));
-    if (number != record) {
-      damaged(event_log, record, offset,
-              fmt::format("event number {} where {} was expected (records missing or out of "
-                          "order)",
-                          number, record));
-    }
-    if (channel_bytes <= 0 || channel_bytes > kMaxChannelBytes || data_bytes < 0) {
-      damaged(event_log, record, offset,
-              fmt::format("impossible lengths in the record header (channel {} bytes, data {} "
-                          "bytes)",
-                          channel_bytes, data_bytes));
-    }
-    const uint64_t body = static_cast<uint64_t>(channel_bytes) + static_cast<uint64_t>(data_bytes);
-    if (body > left - kHeaderBytes) {
-      damaged(event_log, record, offset,
-              fmt::format("the header announces {} bytes of channel and data, the file has {} "
-                          "left (truncated)",
-                          body, left - kHeaderBytes));
-    }
-    event.record = record;
-    event.offset = offset;
-    event.channel.resize(static_cast<std::size_t>(channel_bytes));
-    event.data.resize(static_cast<std::size_t>(data_bytes));
-    in.read(event.channel.data(), channel_bytes);
-    in.read(reinterpret_cast<char*>(event.data.data()), data_bytes);
-    if (!in) damaged(event_log, record, offset, "read failed");
-    offset += kHeaderBytes + body;
+  while (auto next = reader.next()) {
+    event.record = next->number;
+    event.offset = reader.event_offset();
+    event.channel = std::move(next->channel);
+    event.data = std::move(next->data);
     visit(event);
   }
 }

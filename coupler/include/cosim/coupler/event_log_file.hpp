@@ -104,12 +104,16 @@ class EventLogReader {
   bool compressed() const { return compressed_; }
   // File offset of the compressed data of the block the last event came from.
   uint64_t block_offset() const { return block_offset_; }
+  // Where the last event was found: its record's offset in a plain log, its block's data
+  // offset in a compressed one (for messages that name damage found in the event itself).
+  uint64_t event_offset() const { return event_offset_; }
   // The blocks of a compressed log (from the index, else from a scan); empty for plain logs.
   const std::vector<EventLogBlock>& blocks();
 
  private:
   bool load_block(uint64_t offset);
   std::optional<LoggedEvent> next_plain();
+  std::optional<LoggedEvent> next_compressed();
   void scan_blocks();
   [[noreturn]] void damaged(uint64_t offset, const std::string& what) const;
 
@@ -125,6 +129,9 @@ class EventLogReader {
   std::vector<EventLogBlock> blocks_;
   bool blocks_known_ = false;
   uint64_t plain_offset_ = 0;
+  int64_t plain_record_ = 0;
+  uint64_t event_offset_ = 0;
+  int64_t expected_number_ = 0;  // the number the next event must carry
 };
 
 // Writes every event of `log` (from where it stands) to `file` as a plain LCM log, the format of
