@@ -48,6 +48,7 @@ OpenBoundarySettings parse_inflow(scenario::Section inflow) {
 }
 
 SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension, double spacing) {
+  if (is_flume_scene(scene)) return parse_flume_scene(scene, dimension, spacing);  // scene_3d
   SceneSettings s;
   s.kind = scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel",
                                  "open_channel", "pool_fishway", "periodic_pool"});

@@ -20,6 +20,7 @@ namespace cosim::mps {
 
 struct SceneSettings {
   // dam_break | still_water_tank | periodic_channel | open_channel | pool_fishway | periodic_pool
+  // | flume (3D only, scene_3d.hpp: tank_length, tank_width, tank_height and the column)
   std::string kind;
   double column_width = 0, column_height = 0;  // dam_break
   double column_x = 0;                         // dam_break in 3D: upstream face's x [m]
