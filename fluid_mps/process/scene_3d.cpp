@@ -40,6 +40,12 @@ SceneSettings parse_flume_scene(scenario::Section& scene, int dimension, double 
   s.column_width = x_max - s.column_x;
   s.column_height = water.number("depth", Range::positive());
   if (s.column_height > s.tank_height) water.fail("depth", "exceeds the flume's wall_height");
+  if (scene.has("outlet_x")) {
+    s.outlet_x = scene.number("outlet_x", Range::positive());
+    if (s.outlet_x <= x_max || s.outlet_x >= s.tank_length) {
+      scene.fail("outlet_x", "must lie between the water's x_max and the flume's end");
+    }
+  }
   s.solids = parse_stl_solids(scene);
   s.wall_layers = scene.integer("wall_layers", s.wall_layers, Range::between(1, 10));
   s.dummy_layers = scene.integer("dummy_layers", s.dummy_layers, Range::between(0, 10));

@@ -20,7 +20,9 @@ std::vector<TriangleMesh> parse_stl_solids(scenario::Section& scene);
 // water `water: {x_min (default 0), x_max, depth}` across the whole width, at rest until t = 0.
 // The slope is the world's (world.slope_degrees: x along the bed, gravity tilted,
 // docs/architecture.md), so the bed is flat in the solver's coordinates and its walls lie on the
-// lattice, where the DEM's triangles are. Optional `solids` (STL), wall_layers, dummy_layers.
+// lattice, where the DEM's triangles are. Optional `outlet_x`: fluid past it leaves the flow (the
+// water running off a flume's end: the end wall behind it is only the lattice's edge, and the
+// surge never slams into it), `solids` (STL), wall_layers, dummy_layers.
 // The sizes must be whole cells of particle_spacing (a face off the lattice would stand up to
 // l0 / 2 from the DEM's wall).
 bool is_flume_scene(scenario::Section& scene);  // kind: flume
