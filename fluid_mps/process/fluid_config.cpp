@@ -55,8 +55,8 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
   // 3D: the tanks of scenes_3d.cpp, `tank_width` across (y); the other kinds are 2D only.
   if (dimension == 3) {
     if (s.kind != "dam_break" && s.kind != "still_water_tank") {
-      scene.fail("kind", fmt::format("'{}' has no 3D scene (dimension: 3 builds dam_break or "
-                                     "still_water_tank)",
+      scene.fail("kind", fmt::format("'{}' has no 3D scene (dimension: 3 builds dam_break, "
+                                     "still_water_tank or flume)",
                                      s.kind));
     }
     s.tank_width = scene.number("tank_width", Range::positive());
