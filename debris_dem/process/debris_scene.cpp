@@ -24,6 +24,9 @@ BuiltScene build_scene(DemWorld& world, const DebrisConfig& config) {
     }
   }
   if (config.box) add_open_box(world, config.box->min, config.box->max, config.structure);
+  for (const auto& mesh : config.walls) {
+    for (const auto& t : mesh) world.add_triangle(t.a, t.b, t.c, config.structure);
+  }
   if (config.packing) {
     scene.packing = random_packing(world, *config.packing, config.debris, config.logs);
   }

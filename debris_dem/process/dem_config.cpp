@@ -2,12 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <string>
 #include <tuple>
 #include <utility>
 
 #include "cosim/scenario/parameter_reader.hpp"
+#include "cosim/scenario/stl_section.hpp"
 #include "structure_keys.hpp"
 
 namespace cosim::dem {
@@ -134,6 +136,17 @@ void set_domain(DebrisConfig& config) {
     p.domain_min = config.flume ? Eigen::Vector3d(p.domain_min.cwiseMin(low)) : low;
     p.domain_max = config.flume ? Eigen::Vector3d(p.domain_max.cwiseMax(high)) : high;
   }
+  // STL walls: their bounds grown like a box's. Without a flume or box the default (+-1e6 m)
+  // stays, as walls alone may well be open to one side.
+  if (!config.walls.empty() && (config.flume || config.box)) {
+    Eigen::AlignedBox3d bounds;
+    for (const auto& mesh : config.walls) {
+      for (const auto& t : mesh) bounds.extend(t.a).extend(t.b).extend(t.c);
+    }
+    p.domain_min = p.domain_min.cwiseMin(bounds.min() - Eigen::Vector3d::Constant(margin));
+    p.domain_max =
+        p.domain_max.cwiseMax(bounds.max() + Eigen::Vector3d(margin, margin, 10 * margin));
+  }
 }
 
 // What each reference needs of the scene.
@@ -188,12 +201,22 @@ DebrisConfig parse_config(scenario::Section& section, const scenario::Scene& sce
 
   parse_flume(section, config);
   parse_box(section, config);
+  config.walls = scenario::read_stl_list(section, "walls");
   parse_packing(section, config);
   parse_elements(section, config);
   if (!config.packing && config.elements.empty()) {
     section.fail("elements", "nothing moves: give a packing or elements");
   }
   set_domain(config);
+  if (section.has("front_gauge_x")) {
+    if (!config.dam) section.fail("front_gauge_x", "only used with a dam");
+    const double x = section.number("front_gauge_x", Range::positive());
+    if (config.gate && x <= config.gate->x) {
+      section.fail("front_gauge_x", "must lie downstream of the gate");
+    }
+    if (x >= config.dam->x) section.fail("front_gauge_x", "must lie upstream of the dam");
+    config.front_gauge_x = x;
+  }
   config.output_interval =
       section.number("output_interval", scene_output_interval, Range::positive());
   if (section.has("reference")) {

@@ -15,6 +15,7 @@
 #include "cosim/debris_dem/scenes.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
+#include "cosim/scenario/stl.hpp"
 #include "element_reference.hpp"
 
 namespace cosim::dem {
@@ -67,6 +68,13 @@ struct DebrisConfig {
   std::vector<SphereClass> sphere_classes;
   std::optional<GateSettings> gate;  // needs the flume and the packing
   std::vector<ElementSettings> elements;
+  // `walls`: STL files whose triangles are fixed wall triangles of the structure material
+  // (cosim/scenario/stl_section.hpp; the fluid_mps `solids` read the same files) [m].
+  std::vector<scenario::TriangleMesh> walls;
+  // `front_gauge_x` (with a dam): when the debris front (99 % volume quantile) first passes this
+  // x [m], the debris flow's length and shape are recorded (seed 004 fig. 13: about 1 m upstream
+  // of the dam).
+  std::optional<double> front_gauge_x;
   double output_interval = 0;
   std::optional<ElementReferenceSettings> reference;  // single-element scenes
 };

@@ -2,7 +2,8 @@
 // and/or an open box) and the explicit elements, lets a gated packing settle, then (gate removed
 // at t = 0) sub-cycles through every coupling window with the ambient flow at its moving
 // elements, returning positions, velocities and fluid forces. Reports the capture rate P_V of
-// seed 004 eq. 55 and the woody-debris ratio K_w of eq. 54 when there is a dam, the
+// seed 004 eq. 55 and the woody-debris ratio K_w of eq. 54 when there is a dam (and, with
+// front_gauge_x, the debris flow's length and shape as its front passes that x), the
 // volume-weighted mean velocity, and a single element's final state.
 #include <spdlog/spdlog.h>
 
@@ -118,6 +119,60 @@ struct RunTotals {
   Eigen::Vector3d fluid_impulse = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_fluid_impulse = Eigen::Vector3d::Zero();  // interaction, last window
   Eigen::Vector3d interaction_impulse = Eigen::Vector3d::Zero();
+};
+
+// The debris flow's shape when its front first passed front_gauge_x (dem::DebrisFront).
+struct FrontRecord {
+  bool taken = false;
+  double time = 0.0;  // after the gate opened [s]
+  dem::DebrisFront front;
+
+  void observe(double now, const dem::DemWorld& world, const std::vector<int>& debris,
+               const dem::DebrisConfig& config) {
+    if (taken || !config.front_gauge_x) return;
+    const double width = config.flume ? config.flume->width : 1.0;
+    dem::DebrisFront f = dem::debris_front(world, debris, width);
+    if (f.front < *config.front_gauge_x) return;
+    taken = true;
+    time = now;
+    front = std::move(f);
+  }
+  void report(coupler::MetricsReport& report) const {
+    const double nan = std::nan("");
+    report.value("debris_front_length", taken ? front.length : nan, "m");
+    report.value("debris_front_time", taken ? time : nan, "s");
+    report.value("debris_front_extent", taken ? front.extent : nan, "m");
+    report.value("debris_head_over_body", taken ? front.head_over_body : nan, "");
+    report.value("debris_log_front_enrichment", taken ? front.log_front_enrichment : nan, "");
+    if (!taken) return;
+    report.info()["front_profile_x"] = front.bin_x;
+    report.info()["front_profile_top"] = front.top;
+    report.info()["front_profile_solid_depth"] = front.solid_depth;
+    report.info()["front_position"] = front.front;
+    report.info()["front_tail"] = front.tail;
+  }
+  void save(checkpoint::Writer& out) const {
+    out.vector("debris_process.front_scalars",
+               std::vector<double>{taken ? 1.0 : 0.0, time, front.front, front.tail, front.length,
+                                   front.extent, front.head_over_body, front.log_front_enrichment});
+    out.vector("debris_process.front_x", front.bin_x);
+    out.vector("debris_process.front_top", front.top);
+    out.vector("debris_process.front_solid_depth", front.solid_depth);
+  }
+  void load(const checkpoint::Reader& in) {
+    const auto v = in.vector<double>("debris_process.front_scalars");
+    taken = v.at(0) != 0.0;
+    time = v.at(1);
+    front.front = v.at(2);
+    front.tail = v.at(3);
+    front.length = v.at(4);
+    front.extent = v.at(5);
+    front.head_over_body = v.at(6);
+    front.log_front_enrichment = v.at(7);
+    front.bin_x = in.vector<double>("debris_process.front_x");
+    front.top = in.vector<double>("debris_process.front_top");
+    front.solid_depth = in.vector<double>("debris_process.front_solid_depth");
+  }
 };
 
 void finish_report(const dem::DemWorld& world, const dem::DebrisConfig& config,
@@ -240,6 +295,7 @@ class DebrisProcess final : public coupler::Solver {
     }
     totals_.interaction_impulse += totals_.last_fluid_impulse;
     series_.record(output_time(), world_);
+    front_.observe(output_time(), world_, debris_, config_);
     if (suspension_) suspension_->observe(output_time(), mean_velocity(world_));
     if (reference_) {
       const int element = debris_.front();
@@ -258,6 +314,7 @@ class DebrisProcess final : public coupler::Solver {
   void finish(coupler::MetricsReport& report) override {
     series_.write(writer_);
     finish_report(world_, config_, scene_, totals_, report);
+    if (config_.front_gauge_x) front_.report(report);
     if (reference_) reference_->report(report);
     if (suspension_) suspension_->report(report);
   }
@@ -269,11 +326,13 @@ class DebrisProcess final : public coupler::Solver {
     dem::save_checkpoint(world_, out);
     series_.save(out);
     out.value("debris_process.totals", totals_);
+    front_.save(out);
   }
   void load_checkpoint(const checkpoint::Reader& in) override {
     dem::load_checkpoint(world_, in);
     series_.load(in);
     totals_ = in.value<RunTotals>("debris_process.totals");
+    front_.load(in);
   }
 
  private:
@@ -302,6 +361,7 @@ class DebrisProcess final : public coupler::Solver {
   Series series_;
   const double time_offset_;
   RunTotals totals_;
+  FrontRecord front_;
   std::optional<dem::ElementReference> reference_;
   std::optional<dem::SuspensionReference> suspension_;
 };

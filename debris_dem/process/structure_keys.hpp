@@ -23,6 +23,8 @@ void visit_parameters(P& p, V& v) {
   v(Key("wall_height").unit("m").in(Range::positive()).needed().doc("of the side walls"),
     p.wall_height);
   v(Key("upstream_wall").doc("a wall closes x = 0"), p.upstream_wall);
+  v(Key("downstream_wall").doc("a wall closes x = length (the water pools below the dam)"),
+    p.downstream_wall);
 }
 
 // seed 004 fig. 12: fixed spheres of 7-20 mm embedded in the bed.

@@ -38,6 +38,9 @@ std::vector<int> add_flume(DemWorld& world, const FlumeSpec& s, const Material& 
   if (s.upstream_wall) {
     add_rectangle(world, {x0, 0, 0}, {x0, w, 0}, {x0, w, h}, {x0, 0, h}, material, ids);
   }
+  if (s.downstream_wall) {
+    add_rectangle(world, {x1, 0, 0}, {x1, w, 0}, {x1, w, h}, {x1, 0, h}, material, ids);
+  }
   return ids;
 }
 
@@ -204,6 +207,75 @@ double capture_rate(const DemWorld& world, const std::vector<int>& debris, doubl
     if (world.position(i).x() < x_dam) retained += v;
   }
   return total > 0.0 ? retained / total : 0.0;
+}
+
+DebrisFront debris_front(const DemWorld& world, const std::vector<int>& debris, double width,
+                         double bin) {
+  DebrisFront f;
+  if (debris.empty()) return f;
+  struct Piece {
+    double x, volume;
+  };
+  std::vector<Piece> pieces;
+  double total = 0.0, low = world.position(debris.front()).x(), high = low;
+  for (const int i : debris) {
+    const double x = world.position(i).x();
+    pieces.push_back({x, world.volume(i)});
+    total += world.volume(i);
+    low = std::min(low, x);
+    high = std::max(high, x);
+  }
+  f.extent = high - low;
+  std::sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.x < b.x; });
+  auto quantile = [&](double q) {
+    double sum = 0.0;
+    for (const auto& p : pieces) {
+      sum += p.volume;
+      if (sum >= q * total) return p.x;
+    }
+    return pieces.back().x;
+  };
+  f.tail = quantile(0.01);
+  f.front = quantile(0.99);
+  f.length = f.front - f.tail;
+  const int bins = std::max(1, static_cast<int>(std::ceil(f.length / bin)));
+  f.bin_x.resize(bins);
+  f.top.assign(bins, 0.0);
+  f.solid_depth.assign(bins, 0.0);
+  for (int b = 0; b < bins; ++b) f.bin_x[b] = f.tail + (b + 0.5) * bin;
+  const double third = f.front - f.length / 3.0;
+  double logs = 0.0, logs_front = 0.0, volume_front = 0.0;
+  for (const int i : debris) {
+    const Eigen::Vector3d x = world.position(i);
+    const bool log = world.kind(i) == ElementKind::kCylinder;
+    if (log) logs += world.volume(i);
+    if (x.x() >= third && x.x() <= f.front) {
+      volume_front += world.volume(i);
+      if (log) logs_front += world.volume(i);
+    }
+    if (x.x() < f.tail || x.x() > f.front) continue;
+    const int b = std::min(bins - 1, static_cast<int>((x.x() - f.tail) / bin));
+    // A log's highest point: its centre plus its radius and the rise of half its length.
+    const double reach = log ? world.radius(i) + 0.5 * world.length(i) * std::abs(world.axis(i).z())
+                             : world.radius(i);
+    f.top[b] = std::max(f.top[b], x.z() + reach);
+    f.solid_depth[b] += world.volume(i) / (bin * width);
+  }
+  // Head: the front fifth of the bins (at least one); body: the median top of the others.
+  const int head_bins = std::max(1, bins / 5);
+  const double head = *std::max_element(f.top.end() - head_bins, f.top.end());
+  std::vector<double> body(f.top.begin(), f.top.end() - head_bins);
+  if (!body.empty()) {
+    std::nth_element(body.begin(), body.begin() + body.size() / 2, body.end());
+    const double median = body[body.size() / 2];
+    f.head_over_body = median > 0.0 ? head / median : std::nan("");
+  } else {
+    f.head_over_body = std::nan("");
+  }
+  f.log_front_enrichment = logs > 0.0 && volume_front > 0.0
+                               ? (logs_front / logs) / (volume_front / total)
+                               : std::nan("");
+  return f;
 }
 
 void prescribed_flume_flow(const DemWorld& world, const Eigen::Vector3d& surface_velocity,

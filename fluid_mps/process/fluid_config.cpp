@@ -48,14 +48,15 @@ OpenBoundarySettings parse_inflow(scenario::Section inflow) {
 }
 
 SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension, double spacing) {
+  if (is_flume_scene(scene)) return parse_flume_scene(scene, dimension, spacing);  // scene_3d
   SceneSettings s;
   s.kind = scene.choice("kind", {"dam_break", "still_water_tank", "periodic_channel",
                                  "open_channel", "pool_fishway", "periodic_pool"});
   // 3D: the tanks of scenes_3d.cpp, `tank_width` across (y); the other kinds are 2D only.
   if (dimension == 3) {
     if (s.kind != "dam_break" && s.kind != "still_water_tank") {
-      scene.fail("kind", fmt::format("'{}' has no 3D scene (dimension: 3 builds dam_break or "
-                                     "still_water_tank)",
+      scene.fail("kind", fmt::format("'{}' has no 3D scene (dimension: 3 builds dam_break, "
+                                     "still_water_tank or flume)",
                                      s.kind));
     }
     s.tank_width = scene.number("tank_width", Range::positive());

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@ namespace cosim::mps {
 
 struct SceneSettings {
   // dam_break | still_water_tank | periodic_channel | open_channel | pool_fishway | periodic_pool
+  // | flume (3D only, scene_3d.hpp: tank_length, tank_width, tank_height and the column)
   std::string kind;
   double column_width = 0, column_height = 0;  // dam_break
   double column_x = 0;                         // dam_break in 3D: upstream face's x [m]
@@ -39,6 +41,8 @@ struct SceneSettings {
   FishwayGeometry fishway;      // pool_fishway, periodic_pool
   double fill_discharge = 0;    // periodic_pool: fill to the crest plus the weir head of this q
   std::vector<Weir> weirs;      // filled by the fishway scene builders
+  // flume: fluid past this x leaves the flow (mps::remove_fluid_beyond; scene_3d.hpp) [m]
+  double outlet_x = std::numeric_limits<double>::infinity();
 };
 
 // Eulerian observation points (velocity and water presence), recorded every window.

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 
 #include "cosim/coupler/links.hpp"
@@ -176,6 +177,7 @@ class FluidProcess final : public coupler::Solver {
       info["final_measured_level"] = open_boundaries_->measured_level();
     }
     info["particles"] = system_->particle_count();
+    if (std::isfinite(config_.scene.outlet_x)) info["outlet_particles"] = outlet_particles_;
     if (config_.displacement_radius > 0.0) {
       // Above kMaximumSolidFraction the fluid was given back some of the solids' volume.
       info["largest_solid_fraction"] = largest_solid_fraction_;
@@ -194,7 +196,8 @@ class FluidProcess final : public coupler::Solver {
     info["out_of_plane_solid_force_impulse"] = json(link_.out_of_plane_impulse());
     // Momentum budget of the fluid (closed domains): its momentum change against every source
     // (gravity, walls, pressure, collisions, solids), relative to the gravity and solid impulses.
-    // Open boundaries add and remove particles, which the budget does not follow.
+    // Open boundaries add and remove particles, which the budget does not follow; a flume's
+    // outlet books the momentum the leaving water carries off (step_window).
     const Eigen::Vector3d change = system_->total_fluid_momentum() - initial_momentum_;
     if (!open_boundaries_ && budget_scale_ > 0.0) {
       info["momentum_budget_residual"] = (change - budget_sources_).norm() / budget_scale_;
@@ -211,6 +214,9 @@ class FluidProcess final : public coupler::Solver {
     out.value("fluid_process.steps", steps_);
     out.value("fluid_process.pcg_iterations", pcg_iterations_);
     out.value("fluid_process.most_pcg_iterations", most_pcg_iterations_);
+    if (std::isfinite(config_.scene.outlet_x)) {
+      out.value("fluid_process.outlet_particles", outlet_particles_);
+    }
     out.value("fluid_process.undelivered", undelivered_);
     out.value("fluid_process.largest_solid_fraction", largest_solid_fraction_);
     out.value("fluid_process.impulses", impulses_);
@@ -233,6 +239,9 @@ class FluidProcess final : public coupler::Solver {
     steps_ = in.value<int64_t>("fluid_process.steps");
     pcg_iterations_ = in.value<int64_t>("fluid_process.pcg_iterations");
     most_pcg_iterations_ = in.value<int>("fluid_process.most_pcg_iterations");
+    if (std::isfinite(config_.scene.outlet_x)) {
+      outlet_particles_ = in.value<int64_t>("fluid_process.outlet_particles");
+    }
     undelivered_ = in.value<Eigen::Vector3d>("fluid_process.undelivered");
     largest_solid_fraction_ = in.value<double>("fluid_process.largest_solid_fraction");
     impulses_ = in.value<mps::FluidImpulses>("fluid_process.impulses");
@@ -298,6 +307,15 @@ class FluidProcess final : public coupler::Solver {
       impulses_.wall_pressure += step.wall_pressure_impulse;
       impulses_.fluid_pressure += step.pressure_impulse - step.wall_pressure_impulse;
       if (open_boundaries_) open_boundaries_->update();
+      if (std::isfinite(config_.scene.outlet_x)) {
+        // The momentum the leaving water carries off is booked, so the budget still closes.
+        const Eigen::Vector3d before = system_->total_fluid_momentum();
+        const int left = mps::remove_fluid_beyond(*system_, config_.scene.outlet_x);
+        if (left > 0) {
+          outlet_particles_ += left;
+          budget_sources_ += system_->total_fluid_momentum() - before;
+        }
+      }
       pcg_iterations_ += step.pcg_iterations;
       most_pcg_iterations_ = std::max(most_pcg_iterations_, step.pcg_iterations);
     }
@@ -316,6 +334,7 @@ class FluidProcess final : public coupler::Solver {
   std::optional<mps::ReferenceTracker> reference_;
   int64_t steps_ = 0, pcg_iterations_ = 0;
   int most_pcg_iterations_ = 0;
+  int64_t outlet_particles_ = 0;  // fluid particles that left through the flume's outlet
   Eigen::Vector3d undelivered_ = Eigen::Vector3d::Zero();
   double largest_solid_fraction_ = 0.0;  // over the run (displacement_radius > 0)
   mps::FluidImpulses impulses_;          // momentum the fluid received, by source

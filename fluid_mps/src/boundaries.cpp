@@ -170,6 +170,18 @@ double OpenBoundaries::inflow_volume() const {
   return static_cast<double>(dissolved_total_) * l0 * l0;
 }
 
+int remove_fluid_beyond(FluidSystem& system, double outlet_x) {
+  int removed = 0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d x = system.positions()[i];
+    if (x.x() <= outlet_x) continue;
+    system.set_particle(i, ParticleKind::inactive, x, Eigen::Vector3d::Zero());
+    ++removed;
+  }
+  return removed;
+}
+
 BoundaryUpdate OpenBoundaries::update() {
   const OpenBoundarySettings& s = settings_;
   const double l0 = system_.parameters().particle_spacing;

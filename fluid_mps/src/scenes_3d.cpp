@@ -2,9 +2,7 @@
 // or closed triangle surfaces (STL), filled with water boxes, on one lattice of cells l0 wide.
 #include <array>
 #include <cmath>
-#include <cstdint>
 #include <deque>
-#include <fstream>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -120,12 +118,6 @@ double ray_hit(const Triangle& t, const Eigen::Vector3d& origin, const Eigen::Ve
   return e2.dot(q) / det;
 }
 
-float read_float(std::istream& in) {
-  float value = 0.0f;
-  in.read(reinterpret_cast<char*>(&value), sizeof value);
-  return value;
-}
-
 void require_3d(const MpsParameters& p, const char* builder) {
   if (p.dimension != 3) {
     throw std::invalid_argument(std::string(builder) + " needs dimension = 3");
@@ -141,49 +133,6 @@ bool inside_mesh(const TriangleMesh& mesh, const Eigen::Vector3d& point) {
   int crossings = 0;
   for (const auto& t : mesh) crossings += ray_hit(t, point, direction) > 0.0;
   return crossings % 2 == 1;
-}
-
-TriangleMesh read_stl(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error("read_stl: cannot open " + file.string());
-  // Binary: an 80-byte header, a triangle count, then 50 bytes a triangle (normal, 3 vertices
-  // as float32, 2 attribute bytes). Anything of another size is read as ASCII.
-  char header[80] = {};
-  std::uint32_t count = 0;
-  in.read(header, sizeof header);
-  in.read(reinterpret_cast<char*>(&count), sizeof count);
-  const auto size = std::filesystem::file_size(file);
-  TriangleMesh mesh;
-  if (in && size == 84 + 50ull * count) {
-    for (std::uint32_t i = 0; i < count; ++i) {
-      std::array<Eigen::Vector3d, 4> v;  // normal, then the three vertices
-      for (auto& x : v) {
-        for (int k = 0; k < 3; ++k) x[k] = read_float(in);  // in order: x, y, z
-      }
-      in.ignore(2);
-      mesh.push_back({v[1], v[2], v[3]});
-    }
-    return mesh;
-  }
-  in.clear();
-  in.seekg(0);
-  std::vector<Eigen::Vector3d> vertices;
-  std::string word;
-  while (in >> word) {
-    if (word != "vertex") continue;
-    Eigen::Vector3d x;
-    if (!(in >> x.x() >> x.y() >> x.z())) {
-      throw std::runtime_error("read_stl: " + file.string() + ": bad vertex");
-    }
-    vertices.push_back(x);
-  }
-  if (vertices.empty() || vertices.size() % 3 != 0) {
-    throw std::runtime_error("read_stl: " + file.string() + ": no triangles (or a broken one)");
-  }
-  for (std::size_t i = 0; i < vertices.size(); i += 3) {
-    mesh.push_back({vertices[i], vertices[i + 1], vertices[i + 2]});
-  }
-  return mesh;
 }
 
 ParticleSet tank_3d(MpsParameters& parameters, const Tank3d& tank,

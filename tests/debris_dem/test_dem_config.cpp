@@ -8,7 +8,9 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
+#include "cosim/debris_dem/scenes.hpp"
 #include "cosim/prescribed_flow/config.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "dem_config.hpp"
@@ -181,6 +183,58 @@ TEST(DemConfig, ErrorsNameFileLineAndKey) {
         "scenario.yaml:" + std::to_string(line) + ": key 'participants.debris_dem." + c.key + "': ";
     EXPECT_NE(message.find(where), std::string::npos) << message << "\nexpected: " << where;
     EXPECT_NE(message.find(c.problem), std::string::npos) << message;
+  }
+}
+
+// An STL file of the open box's five faces (ASCII, in mm) gives the DEM the same wall triangles as
+// the declared `box:`, vertex for vertex; a missing or broken file is refused at its key.
+TEST(DemConfig, AnStlBoxGivesTheSameWallsAsTheDeclaredBox) {
+  const Eigen::Vector3d lo(0.0, 0.0, 0.0), hi(0.4, 0.2, 0.3);
+  DemWorld declared(DemParameters{});
+  const std::vector<int> ids = add_open_box(declared, lo, hi, Material{});
+  ASSERT_EQ(ids.size(), 10u);
+  const auto folder = write_scene("").parent_path();
+  {
+    std::ofstream stl(folder / "open_box.stl");
+    stl << "solid open_box\n";
+    for (const int id : ids) {
+      stl << "  facet normal 0 0 0\n    outer loop\n";
+      for (const auto& v : declared.triangle_vertices(id)) {
+        stl << "      vertex " << 1000.0 * v.x() << " " << 1000.0 * v.y() << " " << 1000.0 * v.z()
+            << "\n";
+      }
+      stl << "    endloop\n  endfacet\n";
+    }
+    stl << "endsolid open_box\n";
+  }
+  std::ofstream(folder / "broken.stl") << "solid broken\n  facet\n    vertex 0 0 x\n";
+  const std::string sphere =
+      "    elements:\n      - {kind: sphere, center: [0.2, 0.1, 0.05], diameter: 0.01, "
+      "density: 1000}\n";
+  const DebrisConfig from_stl =
+      parse_body("    walls:\n      - {stl: open_box.stl, scale: 0.001}\n" + sphere);
+  ASSERT_EQ(from_stl.walls.size(), 1u);
+  const auto& mesh = from_stl.walls.front();
+  ASSERT_EQ(mesh.size(), ids.size());
+  for (std::size_t t = 0; t < ids.size(); ++t) {
+    const auto v = declared.triangle_vertices(ids[t]);
+    EXPECT_LT((mesh[t].a - v[0]).norm(), 1e-12) << t;
+    EXPECT_LT((mesh[t].b - v[1]).norm(), 1e-12) << t;
+    EXPECT_LT((mesh[t].c - v[2]).norm(), 1e-12) << t;
+  }
+  // Offset moves every vertex; the wall elements are the STL's triangles.
+  const DebrisConfig moved = parse_body(
+      "    walls:\n      - {stl: open_box.stl, scale: 0.001, offset: [1, 0, 0]}\n" + sphere);
+  EXPECT_LT((moved.walls.front()[3].b - (mesh[3].b + Eigen::Vector3d::UnitX())).norm(), 1e-12);
+  for (const auto& [body, needle, problem] :
+       {std::tuple<std::string, std::string, std::string>{
+            "    walls:\n      - {stl: nowhere.stl}\n" + sphere, "nowhere", "nowhere.stl"},
+        {"    walls:\n      - {stl: broken.stl}\n" + sphere, "broken", "bad vertex"}}) {
+    const auto [message, line] = error_and_line(body, needle);
+    const std::string where =
+        "scenario.yaml:" + std::to_string(line) + ": key 'participants.debris_dem.walls[0].stl': ";
+    EXPECT_NE(message.find(where), std::string::npos) << message << "\nexpected: " << where;
+    EXPECT_NE(message.find(problem), std::string::npos) << message;
   }
 }
 

@@ -110,7 +110,9 @@ const std::vector<Participant>& participants() {
       {"vegetation_beam",
        "`output_interval` is read in `vegetation_beam/process/vegetation_config.cpp`.",
        vegetation_groups},
-      {"debris_dem", "`output_interval` is read in `debris_dem/process/dem_config.cpp`.",
+      {"debris_dem",
+       "`walls` (STL files, `scenario/include/cosim/scenario/stl_section.hpp`), `front_gauge_x` "
+       "and `output_interval` are read in `debris_dem/process/dem_config.cpp`.",
        debris_groups},
       {"prescribed_flow", "",
        [] {

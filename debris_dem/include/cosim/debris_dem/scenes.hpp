@@ -18,9 +18,11 @@ struct FlumeSpec {
   double length = 1.5;
   double width = 0.3;  // walls at y = 0 and y = width
   double wall_height = 0.15;
-  bool upstream_wall = true;  // closes x = x_start
+  bool upstream_wall = true;     // closes x = x_start
+  bool downstream_wall = false;  // closes x = x_start + length (the water's tail pool, 3D fluid)
 };
-// Bed and side walls as triangles (two per rectangle); returns their element ids.
+// Bed and side walls (and the end walls asked for) as triangles (two per rectangle); returns their
+// element ids.
 std::vector<int> add_flume(DemWorld& world, const FlumeSpec& spec, const Material& material);
 
 // A box [lo, hi] closed by its floor (z = lo.z) and four side walls, open at the top (world z
@@ -73,6 +75,30 @@ double settle(DemWorld& world, double duration);
 
 // Seed 004 eq. (55): volume fraction of the debris elements still upstream of x_dam.
 double capture_rate(const DemWorld& world, const std::vector<int>& debris, double x_dam);
+
+// The debris flow's streamwise shape (seed 004 section 4.2(1), fig. 13: its length along the
+// flume, about 1.1 m measured and 1.0 m computed about 1 m upstream of the dam; a head that
+// rises a little; logs gathered at the front). Positions are bed coordinates (x along the bed,
+// z normal to it). Quantiles are by volume, so a few elements thrown ahead or left behind do
+// not set the length.
+struct DebrisFront {
+  double front = 0.0;   // x of the 99 % volume quantile [m]
+  double tail = 0.0;    // x of the 1 % volume quantile [m]
+  double length = 0.0;  // front - tail [m]
+  double extent = 0.0;  // largest minus smallest centre x of all elements [m]
+  // From the tail to the front in bins `bin` wide: the top of the debris (largest z + radius of
+  // the elements whose centre is in the bin; 0 for an empty bin) [m] and the solid volume per
+  // bed area (volume / (bin width)) [m].
+  std::vector<double> bin_x, top, solid_depth;
+  // The highest top within the front fifth of the length over the median top of the bins
+  // behind it: above 1 the head stands higher than the body (a surge front).
+  double head_over_body = 0.0;
+  // Share of the log volume in the front third of [tail, front], over that third's share of
+  // the whole debris volume: above 1 the logs gather at the front. NaN without logs.
+  double log_front_enrichment = 0.0;
+};
+DebrisFront debris_front(const DemWorld& world, const std::vector<int>& debris, double width,
+                         double bin = 0.05);
 
 // Prescribed flow for the flume frame after seed 004 eq. (50): velocity U at the surface, 0.8 U
 // on the bed, water fraction 1 below depth h and 0 above; one entry per moving element.

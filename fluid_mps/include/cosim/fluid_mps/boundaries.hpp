@@ -13,6 +13,11 @@
 
 namespace cosim::mps {
 
+// A flume's outlet: fluid particles past x = outlet_x leave the flow, as water running off the
+// end of a flume does. They become inactive (velocity 0, out of every operator, slot kept where
+// they are, never checked for escape). Returns how many left in this call.
+int remove_fluid_beyond(FluidSystem& system, double outlet_x);
+
 // Seed 001 section 2.2(1): drops the pairs (i, j) whose connecting segment crosses a partition
 // segment (strictly opposite sides; a pair passing exactly over a segment end is dropped too).
 // Only particles within the list radius of a segment are tested. Keeps the order, so loops over

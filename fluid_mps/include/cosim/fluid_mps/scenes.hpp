@@ -9,6 +9,7 @@
 
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
+#include "cosim/scenario/stl.hpp"
 
 namespace cosim::mps {
 
@@ -42,13 +43,12 @@ struct Tank3d {
 };
 // A closed triangle surface [m] (a solid's outline, e.g. read from an STL file): a cell whose
 // centre lies inside it (odd number of crossings along a ray) is solid, like an obstacle box.
-struct Triangle {
-  Eigen::Vector3d a, b, c;
-};
-using TriangleMesh = std::vector<Triangle>;
+// The type and the STL reader are the scenario library's (cosim/scenario/stl.hpp), which the DEM
+// reads its wall triangles with too.
+using scenario::read_stl;
+using scenario::Triangle;
+using scenario::TriangleMesh;
 bool inside_mesh(const TriangleMesh& mesh, const Eigen::Vector3d& point);
-// ASCII or binary STL, coordinates in metres (scale them before if the file is in mm).
-TriangleMesh read_stl(const std::filesystem::path& file);
 
 ParticleSet tank_3d(MpsParameters& parameters, const Tank3d& tank,
                     const std::vector<Eigen::AlignedBox3d>& water,
