@@ -126,6 +126,9 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
     s.block_columns = scene.integer("block_columns", s.block_columns, Range::between(1, 100));
     s.pool_particles = scene.integer("pool_particles", s.pool_particles, Range::between(1, 1e7));
     s.inflow = parse_inflow(scene.child("inflow"));
+    // Outlet beyond `length` (boundaries.hpp, ChannelOutlet): level bed and 1:1 adverse slope.
+    s.outlet.flat_length = scene.number("outlet_flat_length", 0.0, Range::non_negative());
+    s.outlet.slope_height = scene.number("outlet_slope_height", 0.0, Range::non_negative());
   }
   s.wall_layers = scene.integer("wall_layers", s.wall_layers, Range::between(1, 10));
   s.dummy_layers = scene.integer("dummy_layers", s.dummy_layers, Range::between(0, 10));
@@ -149,7 +152,8 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
 double estimated_particles(const SceneSettings& s, const MpsParameters& p) {
   const FishwayGeometry& g = s.fishway;
   const double fishway_length = g.pools * g.pool_length + g.outlet_length;
-  double length = std::max({s.tank_length, s.width, s.length, fishway_length});
+  const double channel = s.length + s.outlet.flat_length + s.outlet.slope_height;
+  double length = std::max({s.tank_length, s.width, channel, fishway_length});
   double height = std::max({s.tank_height, s.depth, s.block_height, g.block_height});
   double water = s.column_width * s.column_height + s.width * s.depth + s.length * s.depth;
   if (s.kind == "pool_fishway" || s.kind == "periodic_pool") water = fishway_length * height;
@@ -304,6 +308,9 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
         reference.fail("kind", "canopy_balance needs a periodic_channel scene");
       }
       r.canopy_height = reference.number("canopy_height", Range::positive());
+      // Nepf (2012) shear-layer penetration, reported when both are given (references.cpp).
+      r.drag_coefficient = reference.number("drag_coefficient", 0.0, Range::non_negative());
+      r.frontal_area = reference.number("frontal_area", 0.0, Range::non_negative());
       r.average_from = config.observation->average_from;
     } else if (r.kind == "martin_moyce") {
       r.file = reference.existing_file("file");

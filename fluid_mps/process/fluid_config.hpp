@@ -38,6 +38,7 @@ struct SceneSettings {
   int block_columns = 4, pool_particles = 400;
   int wall_layers = 2, dummy_layers = 2;
   OpenBoundarySettings inflow;  // open_channel, pool_fishway
+  ChannelOutlet outlet;         // open_channel: level bed and adverse slope beyond `length`
   FishwayGeometry fishway;      // pool_fishway, periodic_pool
   double fill_discharge = 0;    // periodic_pool: fill to the crest plus the weir head of this q
   std::vector<Weir> weirs;      // filled by the fishway scene builders
@@ -67,6 +68,9 @@ struct ReferenceSettings {
   double average_from = 0;   // hydrostatic, weirs: time averaging starts here
   double probe_radius = 0;   // hydrostatic: particles within this radius are averaged [m]
   double canopy_height = 0;  // canopy_balance: the inflection of u(y) is expected there
+  // canopy_balance: C_D and a = n d, the stems' frontal area per volume [1/m], of Nepf's
+  // delta_e = 0.23 / (C_D a); zero: not reported.
+  double drag_coefficient = 0, frontal_area = 0;
   ProbeSeriesSettings probes;  // probe_series: the sensors and the measured record
 };
 

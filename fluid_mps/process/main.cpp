@@ -49,7 +49,7 @@ mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings&
   if (scene.kind == "open_channel") {
     return mps::open_channel(parameters, scene.inflow, scene.length, scene.depth,
                              scene.block_height, scene.block_columns, scene.pool_particles,
-                             scene.wall_layers, scene.dummy_layers, 0.0);
+                             scene.wall_layers, scene.dummy_layers, 0.0, scene.outlet);
   }
   return mps::still_water_tank(parameters, scene.width, scene.depth, scene.tank_height,
                                scene.wall_layers, scene.dummy_layers);

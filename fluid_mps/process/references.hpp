@@ -44,6 +44,8 @@ class ReferenceTracker {
   std::vector<ReferenceSeries> series() const;
 
  private:
+  void report_shear_layer(const std::vector<std::pair<double, double>>& profile,
+                          double interior_velocity, coupler::MetricsReport& report) const;
   struct Curve {
     std::vector<double> x, y;
   };
@@ -55,6 +57,7 @@ class ReferenceTracker {
   std::vector<double> times_, fronts_, heights_;
   std::vector<double> pressure_sums_;
   int pressure_samples_ = 0;
+  double kinetic_energy_sum_ = 0.0;  // sum over samples of the fluid's mean u^2 / 2 [J/kg]
   double density_ = 1000;
   double last_time_ = 0;
   // canopy_balance

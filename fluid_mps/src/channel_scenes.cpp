@@ -1,4 +1,5 @@
 // Scene builders of the open and periodic boundaries (boundaries.hpp).
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -33,7 +34,38 @@ void require_2d(const MpsParameters& p) {
   if (p.dimension != 2) throw std::invalid_argument("channel scenes are 2D (dimension = 2)");
 }
 
+// The outlet's bed line in the channel frame (x along the tilted bed, y normal to it): from
+// a = (length, 0) the level bed along the world's horizontal, (cos theta, sin theta) in this
+// frame, to b; then the 1:1 slope along horizontal + vertical (-sin theta, cos theta) to the
+// crest c. sin theta = g_x / |g| (tilt_gravity).
+struct OutletLine {
+  Eigen::Vector3d a, b, c;
+  // Height of the bed surface at x in [a.x, c.x] [m].
+  double surface(double x) const {
+    if (x <= b.x())
+      return b.x() > a.x() ? a.y() + (x - a.x()) * (b.y() - a.y()) / (b.x() - a.x()) : a.y();
+    return b.y() + (x - b.x()) * (c.y() - b.y()) / (c.x() - b.x());
+  }
+};
+
+OutletLine outlet_line(const MpsParameters& parameters, double length, const ChannelOutlet& o) {
+  const double sine = parameters.gravity.x() / parameters.gravity.norm();
+  const double cosine = std::sqrt(1.0 - sine * sine);
+  const Eigen::Vector3d horizontal(cosine, sine, 0.0), vertical(-sine, cosine, 0.0);
+  OutletLine line;
+  line.a = Eigen::Vector3d(length, 0.0, 0.0);
+  line.b = line.a + o.flat_length * horizontal;
+  line.c = line.b + o.slope_height * (horizontal + vertical);
+  return line;
+}
+
 }  // namespace
+
+Eigen::Vector3d outlet_crest(const MpsParameters& parameters, double length,
+                             const ChannelOutlet& outlet) {
+  if (outlet.empty()) return Eigen::Vector3d(length, 0.0, 0.0);
+  return outlet_line(parameters, length, outlet).c;
+}
 
 ParticleSet periodic_channel(MpsParameters& parameters, double length, double depth, double slope,
                              int wall_layers, int dummy_layers) {
@@ -60,7 +92,8 @@ ParticleSet periodic_channel(MpsParameters& parameters, double length, double de
 
 ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settings, double length,
                          double initial_depth, double block_height, int block_columns,
-                         int pool_particles, int wall_layers, int dummy_layers, double slope) {
+                         int pool_particles, int wall_layers, int dummy_layers, double slope,
+                         const ChannelOutlet& outlet) {
   require_2d(parameters);
   tilt_gravity(parameters, slope);
   const double l0 = parameters.particle_spacing;
@@ -77,18 +110,57 @@ ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settin
     for (int r = 0; r < rows; ++r)
       set.add(Eigen::Vector3d(-(c + 0.5) * l0, (r + 0.5) * l0, 0.0), ParticleKind::wall);
   add_bed(set, l0, -(block_columns + 2), nx, wall_layers, dummy_layers);
+  // The last column of the channel, nx - 1 without an outlet, that of the crest with one.
+  int end_column = nx - 1;
+  if (!outlet.empty()) {
+    const OutletLine line = outlet_line(parameters, length, outlet);
+    if (!(line.c.x() > line.a.x())) {
+      throw std::invalid_argument("open_channel: the outlet's crest must lie downstream");
+    }
+    // Solid: the channel bed (y < 0) up to x = length, the outlet's bed and slope under their
+    // line up to the crest, the ground below the bottom dummy row everywhere (so that the
+    // crest's vertical face ends there and no wall lines the bottom of the bed).
+    auto solid = [&](int ix, int iy) {
+      const double x = (ix + 0.5) * l0, y = (iy + 0.5) * l0;
+      if (iy < -layers) return true;
+      if (x < length) return y < 0.0;
+      return x <= line.c.x() && y < line.surface(x);
+    };
+    end_column = static_cast<int>(std::floor(line.c.x() / l0));
+    const int top = static_cast<int>(std::ceil(std::max(line.b.y(), line.c.y()) / l0));
+    // Solid cells within wall_layers (Chebyshev distance, cells) of an open cell are walls, the
+    // next dummy_layers dummies, deeper ones left out (as fishway.cpp).
+    for (int iy = -layers; iy <= top; ++iy) {
+      for (int ix = nx; ix <= end_column + layers; ++ix) {
+        if (!solid(ix, iy)) continue;
+        int distance = layers + 1;
+        for (int dy = -layers; dy <= layers; ++dy)
+          for (int dx = -layers; dx <= layers; ++dx)
+            if (!solid(ix + dx, iy + dy))
+              distance = std::min(distance, std::max(std::abs(dx), std::abs(dy)));
+        if (distance > layers) continue;
+        set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, 0.0),
+                distance <= wall_layers ? ParticleKind::wall : ParticleKind::dummy);
+      }
+    }
+    // Still water over the outlet to the same depth, in its open cells upstream of the crest.
+    for (int iy = 0; iy < ny; ++iy)
+      for (int ix = nx; ix <= end_column; ++ix)
+        if (!solid(ix, iy) && (ix + 0.5) * l0 < line.c.x())
+          set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, 0.0), ParticleKind::fluid);
+  }
   // Pool of recycled particles, parked under the outlet.
-  const Eigen::Vector3d park((nx + 4) * l0, -(layers + 6) * l0, 0.0);
+  const Eigen::Vector3d park((end_column + 5) * l0, -(layers + 6) * l0, 0.0);
   for (int k = 0; k < pool_particles; ++k) set.add(park, ParticleKind::inactive);
   settings.inflow_x = 0.0;
   settings.bed_y = 0.0;
   settings.block_rows = rows;
-  settings.outflow_x = (nx + 3) * l0;
+  settings.outflow_x = (end_column + 4) * l0;
   settings.outflow_y_min = -(layers + 4) * l0;
   if (parameters.domain.isEmpty()) {
     parameters.domain = Eigen::AlignedBox3d(
         Eigen::Vector3d(-(block_columns + layers + 4) * l0, -(layers + 8) * l0, -l0),
-        Eigen::Vector3d((nx + 6) * l0, 2.0 * block_height + 10.0 * l0, l0));
+        Eigen::Vector3d((end_column + 7) * l0, 2.0 * block_height + 10.0 * l0, l0));
   }
   return set;
 }

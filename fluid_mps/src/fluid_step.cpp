@@ -8,6 +8,7 @@
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/operators.hpp"
+#include "cosim/fluid_mps/pressure_gradient.hpp"
 
 // Loops run in parallel from 4096 items on (the `if` clauses below): under that the OpenMP
 // fork/join costs more than the work, and oversubscribed CI cores make it far worse.
@@ -368,46 +369,33 @@ void FluidSystem::solve_pressure(StepReport& report) {
   }
 }
 
-// 5. Pressure gradient (seed 000 eq. (2), radius re_g) with the minimum neighbour pressure p^_i
-// in place of p_i (Koshizuka-Oka) so that inter-particle forces stay repulsive, or the symmetric
-// pair form (MpsParameters::GradientForm), and the correction u' = -dt/rho <grad p>,
-// r^{n+1} = r* + dt u'.
+// 5. Pressure gradient (seed 000 eq. (2), radius re_g) by MpsParameters::GradientForm
+// (pressure_gradient.cpp; by default the minimum form of Koshizuka-Oka, whose neighbour minimum
+// p^_i keeps the pair forces repulsive) on the pairs at r* (near_), and the correction
+// u' = -dt/rho <grad p>, r^{n+1} = r* + dt u'; then particle shifting if it is switched on.
 void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepReport& report) {
   const MpsParameters& p = parameters_;
-  const NeighbourList& list = near_;
   const int n = c.n;
   const double factor = c.dt / p.density * gradient_factor(c.d, c.n0_g);
-  const bool symmetric = p.gradient_form == MpsParameters::GradientForm::symmetric;
-  fill(pressure_change_, n, kZero);
-  fill(wall_pressure_change_, n, kZero);
+  GradientInput in;
+  in.dimension = c.d;
+  in.radius = c.re_g;
+  in.n0 = c.n0_g;
+  in.neighbours = &near_;
+  in.row_end = &near_end_;
+  in.positions = &position_star_;
+  in.kinds = &kind_;
+  in.pressure = &pressure_;
+  in.periodic = &p.periodic;
+  in.unknown = &unknown_;
+  pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kind_[i])) continue;
-    double smallest = pressure_[i];  // p^_i, over the same partners as the gradient
-    if (!symmetric) {
-      for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
-        const int j = list.index[k];
-        if (kind_[j] != ParticleKind::dummy && list.distance[k] < c.re_g) {
-          smallest = std::min(smallest, pressure_[j]);
-        }
-      }
-    }
-    Eigen::Vector3d gradient = Eigen::Vector3d::Zero(), wall_gradient = Eigen::Vector3d::Zero();
-    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
-      const int j = list.index[k];
-      const double r = list.distance[k];
-      if (kind_[j] == ParticleKind::dummy || r >= c.re_g) continue;
-      const double difference = symmetric ? pressure_[i] + pressure_[j] : pressure_[j] - smallest;
-      const Eigen::Vector3d term = gradient_pair_term(
-          difference, r, c.re_g, p.periodic.wrap(position_star_[j] - position_star_[i]));
-      gradient += term;
-      if (!is_fluid(kind_[j])) wall_gradient += term;
-    }
-    // Applied below: the loop still reads the partners' r*. Among solids the neighbourhood is
-    // (1 - phi) full, so the sum is normalised by (1 - phi) n0.
+    // Among solids the neighbourhood is (1 - phi) full, so the sum is normalised by (1 - phi) n0.
     const double local_factor = factor / (1.0 - phi_[i]);
-    pressure_change_[i] = -local_factor * gradient;
-    wall_pressure_change_[i] = -local_factor * wall_gradient;
+    pressure_change_[i] = -local_factor * pressure_change_[i];
+    wall_pressure_change_[i] = -local_factor * wall_pressure_change_[i];
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
@@ -418,6 +406,16 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     const int i = rank_[id];
     report.pressure_impulse += particle_mass_ * pressure_change_[i];
     report.wall_pressure_impulse += particle_mass_ * wall_pressure_change_[i];
+  }
+  if (p.shifting_coefficient > 0.0) {
+    // The concentration gradient at the corrected positions, over the density radius; the
+    // pairs found again there (with the partition mask).
+    update_neighbours(position_star_, report);
+    find_near_pairs(position_star_, c.re_n);
+    in.radius = c.re_n;
+    in.n0 = c.n0_n;
+    shift_particles(in, velocity_star_, unknown_, p.shifting_coefficient, c.dt, p.particle_spacing,
+                    0.1 * p.particle_spacing, position_star_);
   }
 }
 

@@ -128,17 +128,38 @@ class OpenBoundaries {
   int pool_cursor_ = 0;
 };
 
+// Outlet of an open channel (seed 000 section 4: "from the downstream end of the vegetation a
+// level bed 2.0 m long, then a 1:1 adverse slope"; the seed gives no height for the slope): from
+// x = length a bed `flat_length` long that is level in the world, so it rises against the tilted
+// channel bed by tan(theta), theta from the gravity tilt; then a slope rising 1:1 in the world to
+// `slope_height` above that bed; the water leaves over its crest in a free overfall (the solid
+// ends there in a vertical face). Both zero: the channel bed ends at x = length in a free
+// overfall.
+struct ChannelOutlet {
+  double flat_length = 0.0;   // [m], measured level in the world
+  double slope_height = 0.0;  // [m], of the crest above the level bed, in the world's vertical
+  bool empty() const { return flat_length <= 0.0 && slope_height <= 0.0; }
+};
+
 // Scene: open channel with a soluble moving wall inflow (seed 001 section 2.2(3)). Bed top at
-// y = 0 from x = -(block_columns + 2) l0 to x = length (free overfall at x = length); inflow line
+// y = 0 from x = -(block_columns + 2) l0 to x = length (free overfall at x = length, or the
+// `outlet` beyond it, whose solid cells get walls and dummies as the fishway's); inflow line
 // at x = 0; a block of block_columns x block_rows wall particles just upstream of it; still water
 // of `initial_depth` on x in [0, length]; `pool_particles` inactive particles parked under the
 // outlet. Fills parameters.domain if empty and `settings` (inflow_x = 0, bed_y = 0, block_rows,
 // outflow_x = length + 3 l0, outflow_y_min = -(layers + 4) l0). slope = sin(theta) tilts
 // gravity as in periodic_channel.
+// With an outlet the still water fills its open cells to the same initial depth and the outflow
+// line lies 3 l0 beyond the crest.
 ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settings, double length,
                          double initial_depth, double block_height, int block_columns = 4,
                          int pool_particles = 400, int wall_layers = 2, int dummy_layers = 2,
-                         double slope = 0.0);
+                         double slope = 0.0, const ChannelOutlet& outlet = {});
+
+// The crest of an open channel's outlet (x, y in the channel's frame) [m]: (length, 0) without
+// one. Gravity as open_channel leaves it (tilted).
+Eigen::Vector3d outlet_crest(const MpsParameters& parameters, double length,
+                             const ChannelOutlet& outlet);
 
 // Scene: periodic open channel (seed 000 section 3.1, seed 001 section 2.2(4)): x in [0, length)
 // periodic, still water of `depth` over a bed of wall + dummy layers. slope = sin(theta) tilts

@@ -231,7 +231,7 @@ class FluidSystem {
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
   std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,
       wall_correction_, pressure_change_, wall_pressure_change_;
-  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_;
+  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_;
   std::vector<int> collided_, unknown_, unknown_particle_;
   std::vector<std::int64_t> row_length_;
   SparseRows matrix_, hierarchy_matrix_;

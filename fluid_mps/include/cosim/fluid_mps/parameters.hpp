@@ -133,8 +133,30 @@ struct MpsParameters {
   //             a wall locks onto the wall lattice (a bed friction far above the viscous one).
   //             Subtracting each particle's p^ as well (CMPS of Khayyer & Gotoh 2008) keeps the
   //             symmetry but leaves only the gradient of p - p^, about zero in hydrostatic water.
-  enum class GradientForm { minimum, symmetric };
+  //  symmetric_normal_wall: the symmetric form; of the walls' share, the part 2 p_i sum r w/r^2
+  //             (absolute pressure times the wall lattice's bumps) is pressed onto the local wall
+  //             normal (a smooth wall, as polygon walls: Harada et al. 2008, Mitsume et al. 2015),
+  //             the part (p_w - p_i) kept whole: the wall lattice cannot lock the fluid.
+  //  corrected: the minimum form times the correction matrix C_i = [sum w r_ij r_ij^T/r^2]^-1
+  //             (Khayyer & Gotoh 2011; first-order LSMPS, Tamai & Koshizuka 2014): exact for a
+  //             linear pressure on any arrangement, not momentum-conserving.
+  //  corrected_interior: the correction matrix only where particle i and every fluid neighbour
+  //             within the gradient radius are off the free surface (a full neighbourhood), the
+  //             minimum form elsewhere: near the surface the missing neighbours shrink the
+  //             moment matrix and C_i amplifies the one-sided p^_i part (what put the corrected
+  //             still water 17 % low and its dam-break front 14 % ahead).
+  // pressure_gradient.hpp has the operators; docs/validation.md (rigid_canopy) what each gave.
+  enum class GradientForm {
+    minimum,
+    symmetric,
+    symmetric_normal_wall,
+    corrected,
+    corrected_interior
+  };
   GradientForm gradient_form = GradientForm::minimum;
+  // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
+  // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
+  double shifting_coefficient = 0.0;
   double runaway_speed = 50.0;  // [m/s]; faster particles stop the run with a StabilityError
   // Particles outside are 'escaped'. Empty box: the bounding box of the initial particles grown
   // by 20 l0 on each side.
@@ -151,9 +173,12 @@ inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 4> kPr
      {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky}}};
 inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
     {{"mixed", MpsParameters::SourceTerm::mixed}, {"density", MpsParameters::SourceTerm::density}}};
-inline constexpr scenario::Choices<MpsParameters::GradientForm, 2> kGradientForms{
+inline constexpr scenario::Choices<MpsParameters::GradientForm, 5> kGradientForms{
     {{"minimum", MpsParameters::GradientForm::minimum},
-     {"symmetric", MpsParameters::GradientForm::symmetric}}};
+     {"symmetric", MpsParameters::GradientForm::symmetric},
+     {"symmetric_normal_wall", MpsParameters::GradientForm::symmetric_normal_wall},
+     {"corrected", MpsParameters::GradientForm::corrected},
+     {"corrected_interior", MpsParameters::GradientForm::corrected_interior}}};
 
 // The keys of `participants.fluid_mps` that are MpsParameters, each declared once
 // (cosim/scenario/parameters.hpp): the scenario parser, validate_parameters() and `cosim keys`
@@ -204,8 +229,15 @@ void visit_parameters(P& p, V& v) {
     p.pressure_relaxation);
   v(Key("runaway_speed").unit("m/s").in(Range::positive()).doc("faster particles stop the run"),
     p.runaway_speed);
-  v(Key("pressure_gradient").doc("minimum (Koshizuka-Oka) or symmetric (momentum-conserving)"),
+  v(Key("pressure_gradient")
+        .doc("minimum (Koshizuka-Oka), symmetric (momentum-conserving), symmetric_normal_wall "
+             "(symmetric, smooth straight walls), corrected (correction matrix) or "
+             "corrected_interior (correction matrix off the free surface only)"),
     p.gradient_form, kGradientForms);
+  v(Key("shifting_coefficient")
+        .in(Range::between(0.0, 10.0))
+        .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),
+    p.shifting_coefficient);
 }
 
 // Rough memory per particle [bytes]: about 25 per-particle vectors and scalars of FluidSystem

@@ -1,0 +1,73 @@
+// Pressure-gradient models of the MPS correction stage and particle shifting (issue 16). The
+// fluid step (fluid_step.cpp) calls these on its pair list; tests call them on any particle set,
+// so the tested operators are the operators that run.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "cosim/fluid_mps/neighbour_grid.hpp"
+#include "cosim/fluid_mps/parameters.hpp"
+
+namespace cosim::mps {
+
+// What the models read: particles at r*, their kinds and pressures, the pair list with the
+// distances at r* and the gradient radius. Dummy particles carry no pressure and are left out of
+// every sum. The step passes its near-pair list (fluid_pairs.cpp), whose row i ends at
+// row_end[i] rather than at the next row's offset; without row_end a row ends at offset[i + 1].
+struct GradientInput {
+  int dimension = 2;
+  double radius = 0.0;  // r_e of the gradient [m]
+  double n0 = 0.0;      // number density of the full lattice at that radius
+  const NeighbourList* neighbours = nullptr;
+  const std::vector<std::int64_t>* row_end = nullptr;
+  const std::vector<Eigen::Vector3d>* positions = nullptr;
+  const std::vector<ParticleKind>* kinds = nullptr;
+  const std::vector<double>* pressure = nullptr;
+  const PeriodicBoundary* periodic = nullptr;
+  // Pressure unknown of each particle, -1 on the free surface (corrected_interior only).
+  const std::vector<int>* unknown = nullptr;
+
+  std::int64_t begin(int i) const { return neighbours->offset[i]; }
+  std::int64_t end(int i) const { return row_end ? (*row_end)[i] : neighbours->offset[i + 1]; }
+};
+
+// The pair sums S_i of the pressure gradient <grad p>_i = d/n0 S_i [Pa/m] at every fluid
+// particle (zero elsewhere) by `form`, and the share of the wall particles in them (`wall`), which
+// the step books as the walls' pressure force on the fluid. The corrected form returns n0/d C_i
+// times its sum, so the caller scales every form alike (and the minimum form keeps the bits of
+// the sum it always had). `minimum` is the work array of p^_i (smallest pressure around i).
+void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& in,
+                        std::vector<Eigen::Vector3d>& gradient, std::vector<Eigen::Vector3d>& wall,
+                        std::vector<double>& minimum);
+
+// The correction matrix of Khayyer & Gotoh (2011), Appl. Ocean Res. 33: C_i = [sum_j w_ij
+// r_ij (x) r_ij / |r_ij|^2]^-1 over the non-dummy neighbours (the D x D block; the rest of the
+// 3 x 3 matrix is zero in 2D). It is d/n0 times the identity on a full lattice. Where the
+// neighbourhood is too thin to invert (a splash particle with one or two neighbours) it falls
+// back to d/n0 I, the uncorrected operator.
+Eigen::Matrix3d correction_matrix(const GradientInput& in, int i);
+
+// The corrected gradient of a field with reference values: C_i sum_j (phi_j - reference_i)
+// r_ij / |r_ij|^2 w_ij. With reference_i = phi_i it recovers the gradient of a linear field
+// exactly on any arrangement whose C_i exists (Khayyer & Gotoh 2011; the first-order
+// least-squares MPS of Tamai & Koshizuka 2014, Comp. Part. Mech. 1, with the MPS weight).
+std::vector<Eigen::Vector3d> corrected_gradient(const GradientInput& in,
+                                                const std::vector<double>& field,
+                                                const std::vector<double>& reference);
+
+// Fickian particle shifting (Lind, Xu, Stansby & Rogers 2012, J. Comput. Phys. 231; after Xu,
+// Stansby & Laurence 2009): dr_i = -D grad C_i with D = A l0 |u_i| dt and grad C_i the MPS
+// gradient of the particle concentration, d/n0 sum_j r_ij / |r_ij|^2 w_ij over every neighbour
+// (walls and dummies count). It moves particles from crowded to sparse places; velocities are not
+// interpolated to the new position, so the fluid's momentum is untouched. Fluid particles on the
+// free surface (pressure_unknown[i] < 0: no pressure unknown) or with such a particle within the
+// radius are not shifted (Lind et al. shift those along the surface only; here they keep their
+// place). Each shift is capped at `max_shift` [m]. Returns the largest shift [m].
+double shift_particles(const GradientInput& in, const std::vector<Eigen::Vector3d>& velocities,
+                       const std::vector<int>& pressure_unknown, double coefficient, double dt,
+                       double particle_spacing, double max_shift,
+                       std::vector<Eigen::Vector3d>& positions_out);
+
+}  // namespace cosim::mps
