@@ -18,9 +18,12 @@
 
 namespace cosim::mps {
 
+// The scene's values, flat as the builders read them; scene_keys.hpp declares the keys of each
+// kind over them.
 struct SceneSettings {
   // dam_break | still_water_tank | periodic_channel | open_channel | pool_fishway | periodic_pool
   std::string kind;
+  int dimension = 2;  // of the fluid (not a scene key): the 3D keys depend on it
   double column_width = 0, column_height = 0;  // dam_break
   double column_x = 0;                         // dam_break in 3D: upstream face's x [m]
   double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
@@ -37,6 +40,7 @@ struct SceneSettings {
   int wall_layers = 2, dummy_layers = 2;
   OpenBoundarySettings inflow;  // open_channel, pool_fishway
   FishwayGeometry fishway;      // pool_fishway, periodic_pool
+  bool fill_to_weir_head = false;  // pool_fishway: sets fishway.initial_head from the inflow
   double fill_discharge = 0;    // periodic_pool: fill to the crest plus the weir head of this q
   std::vector<Weir> weirs;      // filled by the fishway scene builders
 };
@@ -75,7 +79,7 @@ struct FluidConfig {
   // grown from zero over the first displacement_ramp [s] (water present from the start would
   // otherwise be blasted away in one step).
   double displacement_radius = 0;
-  double displacement_ramp = 0;
+  double displacement_ramp = 0.1;
   double span = 1;              // 2D: the width along y the slice stands for [m]
   coupler::SolverFrame frame;   // world <-> the library's coordinates
   double output_interval = 0;

@@ -7,11 +7,12 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "cosim/scenario/parameter_reader.hpp"
+#include "scene_keys.hpp"
+
 namespace cosim::mps {
 
 namespace {
-
-using scenario::Range;
 
 // Edges used by an odd number of triangles: 0 for a closed surface. Vertices are matched by
 // their exact coordinates, as an STL exporter writes a shared vertex the same way each time.
@@ -38,9 +39,11 @@ std::vector<TriangleMesh> parse_stl_solids(scenario::Section& scene) {
   std::vector<TriangleMesh> solids;
   if (!scene.has("solids")) return solids;
   for (auto& entry : scene.list("solids")) {
-    const auto file = entry.existing_file("stl");
-    const double scale = entry.number("scale", 1.0, Range::positive());
-    const Eigen::Vector3d offset = entry.vector3("offset", Eigen::Vector3d::Zero());
+    StlSolidKeys keys;
+    scenario::read_parameters(entry, keys);  // declared in scene_keys.hpp
+    const auto& file = keys.stl;
+    const double scale = keys.scale;
+    const Eigen::Vector3d& offset = keys.offset;
     TriangleMesh mesh;
     try {
       mesh = read_stl(file);
