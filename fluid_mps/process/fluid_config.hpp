@@ -19,10 +19,13 @@
 
 namespace cosim::mps {
 
+// The scene's values, flat as the builders read them; scene_keys.hpp declares the keys of each
+// kind over them.
 struct SceneSettings {
   // dam_break | still_water_tank | periodic_channel | open_channel | pool_fishway | periodic_pool
   // | flume (3D only, scene_3d.hpp: tank_length, tank_width, tank_height and the column)
   std::string kind;
+  int dimension = 2;  // of the fluid (not a scene key): the 3D keys depend on it
   double column_width = 0, column_height = 0;  // dam_break
   double column_x = 0;                         // dam_break in 3D: upstream face's x [m]
   double width = 0, depth = 0;                 // still_water_tank, channels (initial depth)
@@ -40,6 +43,7 @@ struct SceneSettings {
   OpenBoundarySettings inflow;  // open_channel, pool_fishway
   ChannelOutlet outlet;         // open_channel: level bed and adverse slope beyond `length`
   FishwayGeometry fishway;      // pool_fishway, periodic_pool
+  bool fill_to_weir_head = false;  // pool_fishway: sets fishway.initial_head from the inflow
   double fill_discharge = 0;    // periodic_pool: fill to the crest plus the weir head of this q
   std::vector<Weir> weirs;      // filled by the fishway scene builders
   // flume: fluid past this x leaves the flow (mps::remove_fluid_beyond; scene_3d.hpp) [m]
@@ -83,7 +87,7 @@ struct FluidConfig {
   // grown from zero over the first displacement_ramp [s] (water present from the start would
   // otherwise be blasted away in one step).
   double displacement_radius = 0;
-  double displacement_ramp = 0;
+  double displacement_ramp = 0.1;
   double span = 1;              // 2D: the width along y the slice stands for [m]
   coupler::SolverFrame frame;   // world <-> the library's coordinates
   double output_interval = 0;

@@ -14,20 +14,6 @@ namespace cosim::mps {
 // missing, malformed or open one at its key.
 std::vector<TriangleMesh> parse_stl_solids(scenario::Section& scene);
 
-// kind: flume (3D only), a straight channel for a debris flow: bed z = 0 over x in [0, length],
-// side walls at y = 0 and y = width, end walls at x = 0 and x = length, all wall_height high
-// (the debris_dem flume's keys, with its upstream_wall and downstream_wall), and a reservoir of
-// water `water: {x_min (default 0), x_max, depth}` across the whole width, at rest until t = 0.
-// The slope is the world's (world.slope_degrees: x along the bed, gravity tilted,
-// docs/architecture.md), so the bed is flat in the solver's coordinates and its walls lie on the
-// lattice, where the DEM's triangles are. Optional `outlet_x`: fluid past it leaves the flow (the
-// water running off a flume's end: the end wall behind it is only the lattice's edge, and the
-// surge never slams into it), `solids` (STL), wall_layers, dummy_layers.
-// The sizes must be whole cells of particle_spacing (a face off the lattice would stand up to
-// l0 / 2 from the DEM's wall).
-bool is_flume_scene(scenario::Section& scene);  // kind: flume
-SceneSettings parse_flume_scene(scenario::Section& scene, int dimension, double spacing);
-
 // dam_break (and flume): the column [column_x, column_x + column_width] over the whole width,
 // column_height high; still_water_tank: `width` long (x), filled to `depth`. Water cells inside an
 // obstacle or a solid are solid.

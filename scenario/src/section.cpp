@@ -175,6 +175,28 @@ std::vector<double> Section::numbers(const std::string& key, Range range) {
   return result;
 }
 
+std::vector<double> Section::numbers(const std::string& key, const std::vector<double>& fallback,
+                                     Range range) {
+  if (has(key)) return numbers(key, range);
+  mark_read(key);
+  for (double value : fallback) check_range(key, value, range);
+  resolved_[key] = fallback;
+  return fallback;
+}
+
+Eigen::Vector2d Section::vector2(const std::string& key) {
+  const std::vector<double> values = numbers(key);
+  if (values.size() != 2) fail(key, fmt::format("expected 2 numbers, got {}", values.size()));
+  return {values[0], values[1]};
+}
+
+Eigen::Vector2d Section::vector2(const std::string& key, const Eigen::Vector2d& fallback) {
+  if (has(key)) return vector2(key);
+  mark_read(key);
+  resolved_[key] = std::vector<double>{fallback.x(), fallback.y()};
+  return fallback;
+}
+
 Eigen::Vector3d Section::vector3(const std::string& key) {
   const std::vector<double> values = numbers(key);
   if (values.size() != 3)

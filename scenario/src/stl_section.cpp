@@ -1,5 +1,7 @@
 #include "cosim/scenario/stl_section.hpp"
 
+#include "cosim/scenario/parameter_reader.hpp"
+
 #include <fmt/format.h>
 
 #include <exception>
@@ -11,9 +13,11 @@ std::vector<TriangleMesh> read_stl_list(Section& section, const std::string& key
   std::vector<TriangleMesh> meshes;
   if (!section.has(key)) return meshes;
   for (auto& entry : section.list(key)) {
-    const auto file = entry.existing_file("stl");
-    const double scale = entry.number("scale", 1.0, Range::positive());
-    const Eigen::Vector3d offset = entry.vector3("offset", Eigen::Vector3d::Zero());
+    StlEntryKeys keys;
+    read_parameters(entry, keys);
+    const auto& file = keys.stl;
+    const double scale = keys.scale;
+    const Eigen::Vector3d& offset = keys.offset;
     TriangleMesh mesh;
     try {
       mesh = read_stl(file);

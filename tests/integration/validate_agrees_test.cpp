@@ -160,5 +160,76 @@ TEST(ValidateAgrees, FluidAndDebrisBeyondTheMachinesMemoryAreRefusedByValidate) 
                  "key 'participants.debris_dem.packing.spheres[", "debris_dem needs about");
 }
 
+// The fluid's nested keys are read from their declarations (fluid_mps/process/scene_keys.hpp):
+// a key of another scene kind, inflow control, dimension or reference kind is refused as "only
+// used with ..." (it used to be an "unknown key", or not refused at all), and every refusal names
+// the file, the line and the dotted key.
+TEST(ValidateAgrees, FluidNestedKeysAreRefusedAtTheirKeyWithFileAndLine) {
+  const std::string key = "scenario.yaml:14: key 'participants.fluid_mps.";
+  expect_refused(std::string(kFluid) + "      column_x: 0.1\n", key + "scene.column_x'",
+                 "only used with dimension: 3");
+  expect_refused(std::string(kFluid) + "      depth: 0.1\n", key + "scene.depth'",
+                 "only used with kind: still_water_tank, periodic_channel");
+  expect_refused(std::string(kFluid) + "      tank_width: 0.1\n", key + "scene.tank_width'",
+                 "only used with dimension: 3");
+  expect_refused(
+      std::string(kFluid) + "      obstacles:\n        - {min: [0, 0, 0], max: [1, 1, 1]}\n",
+      key + "scene.obstacles'", "only used with dimension: 3");
+  expect_refused(std::string(kFluid) + "      inflow: {control: velocity}\n", key + "scene.inflow'",
+                 "only used with kind: open_channel, pool_fishway");
+  // A 3D tank needs its width across.
+  expect_refused(replace(kFluid, "    particle_spacing: 0.01\n",
+                         "    particle_spacing: 0.01\n    dimension: 3\n"),
+                 "key 'participants.fluid_mps.scene.tank_width'", "required key is missing");
+
+  const std::string channel =
+      std::string(kFluid).substr(0, std::string(kFluid).find("      kind:")) +
+      R"(      kind: open_channel
+      length: 1.0
+      initial_depth: 0.1
+      block_height: 0.4
+      inflow:
+        control: velocity
+        inflow_rows: 4
+)";
+  EXPECT_EQ(validate(channel).exit_code, 0) << validate(channel).output;
+  expect_refused(channel + "        discharge: 0.01\n",
+                 "scenario.yaml:16: key 'participants.fluid_mps.scene.inflow.discharge'",
+                 "only used with control: discharge");
+  expect_refused(replace(channel, "inflow_rows: 4", "inflow_rows: 0"),
+                 "scenario.yaml:15: key 'participants.fluid_mps.scene.inflow.inflow_rows'",
+                 "value 0 is out of range [1, 1000]");
+  expect_refused(replace(channel, "control: velocity", "control: level"),
+                 "key 'participants.fluid_mps.scene.inflow.target_level'",
+                 "required key is missing");
+
+  const std::string observe =
+      std::string(kFluid) + "    observe:\n      points: [0.1, 0, 0.05]\n      colour: red\n";
+  expect_refused(observe, "scenario.yaml:16: key 'participants.fluid_mps.observe.colour'",
+                 "unknown key");
+  expect_refused(replace(observe, "0.1, 0, 0.05", "0.1, 0"),
+                 "scenario.yaml:15: key 'participants.fluid_mps.observe.points'",
+                 "expected a flat list of x, y, z triples");
+  expect_refused(
+      std::string(kFluid) + "    partitions:\n      - {from: [0.3, 0, 0], to: [0.3, 0.2]}\n",
+      "scenario.yaml:15: key 'participants.fluid_mps.partitions[0].from'",
+      "expected 2 numbers, got 3");
+
+  const std::string hydrostatic =
+      std::string(kFluid) +
+      "    reference:\n      kind: hydrostatic\n      still_depth: 0.2\n      probe_x: 0.1\n"
+      "      probe_depths: [0.05]\n";
+  EXPECT_EQ(validate(hydrostatic).exit_code, 0) << validate(hydrostatic).output;
+  expect_refused(hydrostatic + "      canopy_height: 0.04\n",
+                 "scenario.yaml:19: key 'participants.fluid_mps.reference.canopy_height'",
+                 "only used with kind: canopy_balance");
+  expect_refused(hydrostatic + "      pressure_probes:\n        - {column: P1, at: [0, 0, 0]}\n",
+                 "scenario.yaml:19: key 'participants.fluid_mps.reference.pressure_probes'",
+                 "only used with kind: probe_series");
+  expect_refused(replace(hydrostatic, "probe_depths: [0.05]", "probe_depths: [0.05, -0.1]"),
+                 "scenario.yaml:18: key 'participants.fluid_mps.reference.probe_depths'",
+                 "value -0.1 is out of range (0, inf]");
+}
+
 }  // namespace
 }  // namespace cosim::testing

@@ -40,6 +40,25 @@ void visit_parameters(P& p, V& v) {
   v.rule("top", p.top > p.bottom, "must be above bottom");
 }
 
+// Texts, files, lists of numbers and pairs (the fluid's sensors and partitions).
+struct Sensor {
+  std::string column;
+  std::filesystem::path file;
+  std::vector<double> depths{0.1};
+  Eigen::Vector2d at = Eigen::Vector2d::Zero();
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, Sensor>
+void visit_parameters(P& p, V& v) {
+  using cosim::scenario::Key;
+  using cosim::scenario::Range;
+  v(Key("column").needed().doc("of the record"), p.column);
+  v(Key("file").doc("the record"), p.file);
+  v(Key("depths").unit("m").in(Range::positive()).doc("below the surface"), p.depths);
+  v(Key("at").unit("m").needed().doc("[x, y]"), p.at);
+}
+
 }  // namespace demo
 
 namespace cosim::scenario {
@@ -162,6 +181,60 @@ TEST(Parameters, TheKeyTableListsEveryKeyOnce) {
   EXPECT_EQ(table.rows()[6].default_value, "2");
   ASSERT_EQ(table.rules().size(), 1u);
   EXPECT_EQ(table.rules()[0], "demo.top: must be above bottom");
+}
+
+TEST(Parameters, TextsFilesListsAndPairsAreReadCheckedAndListed) {
+  const auto folder = std::filesystem::temp_directory_path();
+  std::ofstream(folder / "cosim-parameters-record.csv") << "t\n";
+  auto read = [&](const std::string& text) {
+    YAML::Node resolved(YAML::NodeType::Map);
+    const auto file = write_file(text);
+    Section root = Section::root(YAML::LoadFile(file.string()), file, resolved);
+    Section section = root.child("demo");
+    demo::Sensor sensor;
+    read_parameters(section, sensor);
+    root.finish();
+    return std::pair{sensor, resolved};
+  };
+  const auto [sensor, resolved] =
+      read("demo:\n  column: P1\n  file: cosim-parameters-record.csv\n  at: [0.5, 0.25]\n");
+  EXPECT_EQ(sensor.column, "P1");
+  EXPECT_EQ(sensor.file, folder / "cosim-parameters-record.csv");
+  EXPECT_EQ(sensor.at, Eigen::Vector2d(0.5, 0.25));
+  ASSERT_EQ(sensor.depths.size(), 1u);
+  EXPECT_EQ(resolved["demo"]["depths"][0].as<double>(), 0.1) << "the default is written";
+  auto error = [&](const std::string& text) {
+    try {
+      read(text);
+    } catch (const ScenarioError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("demo:\n  column: P1\n  at: [1, 2, 3]\n")
+                .find(":3: key 'demo.at': expected 2 numbers, got 3"),
+            std::string::npos);
+  EXPECT_NE(error("demo:\n  column: P1\n  at: [1, 2]\n  depths: [0.1, 0]\n")
+                .find(":4: key 'demo.depths': value 0 is out of range (0, inf]"),
+            std::string::npos);
+  EXPECT_NE(error("demo:\n  column: P1\n  at: [1, 2]\n  file: nowhere.csv\n")
+                .find(":4: key 'demo.file': file not found"),
+            std::string::npos);
+  EXPECT_NE(error("demo:\n  at: [1, 2]\n").find("key 'demo.column': required key is missing"),
+            std::string::npos);
+  demo::Sensor bad;
+  bad.depths = {0.2, -1.0};
+  EXPECT_THROW(check_parameters(bad, "Sensor"), ParameterError);
+  KeyTable table;
+  describe_parameters<demo::Sensor>(table);
+  ASSERT_EQ(table.rows().size(), 4u);
+  EXPECT_EQ(table.rows()[0].type, "text");
+  EXPECT_EQ(table.rows()[1].type, "file");
+  EXPECT_EQ(table.rows()[2].type, "list of numbers");
+  EXPECT_EQ(table.rows()[2].default_value, "[0.1]");
+  EXPECT_EQ(table.rows()[2].range, "(0, inf]");
+  EXPECT_EQ(table.rows()[3].type, "[a, b]");
+  EXPECT_EQ(table.rows()[3].default_value, "required");
 }
 
 TEST(Parameters, AMemoryEstimateAboveTheMachineIsRefusedAtItsKey) {

@@ -48,5 +48,43 @@ TEST(Keys, OneParticipantsKeysWithTypeDefaultRangeAndUnit) {
   EXPECT_NE(unknown.output.find("magic_flow"), std::string::npos) << unknown.output;
 }
 
+// The fluid's nested keys are listed from their declarations too: a group per scene kind and
+// reference kind, with range, unit, doc and the values they are only used with.
+TEST(Keys, TheFluidsNestedGroupsWithRangeAndDoc) {
+  const auto printed = testing::run_cosim("keys fluid_mps");
+  EXPECT_EQ(printed.exit_code, 0) << printed.output;
+  const std::string& out = printed.output;
+  for (const std::string expected : {
+           "The scene: its kind and walls (`fluid_mps/process/scene_keys.hpp`)",
+           "| `scene.kind` | choice | required | dam_break, still_water_tank, periodic_channel, "
+           "open_channel, pool_fishway, periodic_pool, flume |",
+           "| `scene.tank_width` | number | required | (0, inf] | m | the tank across (y), between "
+           "two side walls (only with dimension: 3 (a flume's is width)) |",
+           "The scene with kind: flume",
+           "| `scene.outlet_x` | number | none | (0, inf] | m | fluid past this x leaves the flow; "
+           "between the water's x_max and the end |",
+           "The scene with kind: dam_break",
+           "| `scene.column_x` | number | 0 | [0, inf] | m | the column's upstream face (only with "
+           "dimension: 3) |",
+           "The scene with kind: pool_fishway",
+           "| `scene.inflow.inflow_rows` | integer | 5 | [1, 1000] |  | rows a column releases",
+           "| `scene.inflow.discharge` | number | required | (0, inf] | m^2/s | q per unit width "
+           "(only with control: discharge) |",
+           "| `scene.obstacles[].min` | [x, y, z] | required |",
+           "| `scene.solids[].stl` | file | required | relative to the bundle |",
+           "| `restart.frame` | integer | -1 |",
+           "| `partitions[].from` | [a, b] | required |",
+           "| `observe.points` | list of numbers | required |",
+           "| `observe.radius` | number | 2 particle_spacing | (0, inf] | m |",
+           "The reference with kind: probe_series",
+           "| `reference.arrival_fraction` | number | 0.1 | (0, 1] |",
+           "| `reference.depth_gauges[].at` | [a, b] | required |",
+           "| `sample_radius` | number | 2 particle_spacing | (0, inf] | m |",
+           "- scene.orifice_height: must be below the crest",
+       }) {
+    EXPECT_NE(out.find(expected), std::string::npos) << "missing: " << expected;
+  }
+}
+
 }  // namespace
 }  // namespace cosim::tool

@@ -10,6 +10,7 @@
 #include "cosim/scenario/parameters.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
+#include "scene_keys.hpp"
 #include "section_keys.hpp"
 #include "structure_keys.hpp"
 
@@ -97,16 +98,66 @@ std::vector<Group> debris_groups() {
   return groups;
 }
 
+std::vector<Group> fluid_groups() {
+  const char* scene_keys = "fluid_mps/process/scene_keys.hpp";
+  mps::FluidConfig config_defaults;
+  mps::SceneSettings scene_defaults;
+  mps::ReferenceSettings reference_defaults;
+  mps::ObservationSettings observation_defaults;
+  std::vector<Group> groups{
+      group<mps::MpsParameters>("MpsParameters", "fluid_mps/include/cosim/fluid_mps/parameters.hpp",
+                                ""),
+      group("The section's own keys", scene_keys, "", mps::FluidSectionKeys{config_defaults}),
+      group("The scene: its kind and walls", scene_keys, "scene.", mps::SceneKeys{scene_defaults})};
+  // One group per kind, so a kind added to kSceneKinds is listed with its keys.
+  for (const auto& kind : mps::kSceneKinds) {
+    mps::visit_scene_kind(kind.value, scene_defaults, [&](const auto& keys) {
+      groups.push_back(
+          group(fmt::format("The scene with kind: {}", kind.name), scene_keys, "scene.", keys));
+    });
+  }
+  groups.push_back(group<mps::OpenBoundarySettings>(
+      fmt::format("The inflow, a soluble moving wall (kind: {}; required there)",
+                  mps::scene_kinds_where(mps::has_inflow)),
+      scene_keys, "scene.inflow."));
+  Group solids = group<mps::ObstacleKeys>(
+      "Solids in a 3D tank (dimension: 3): `scene.obstacles` boxes and `scene.solids` STL "
+      "surfaces, one per entry",
+      scene_keys, "scene.obstacles[].");
+  add_rows<mps::StlSolidKeys>(solids, "scene.solids[].");
+  groups.push_back(std::move(solids));
+  groups.push_back(group<mps::RestartSettings>(
+      "A restart from an output frame (the scene still describes the tank)", scene_keys,
+      "restart."));
+  groups.push_back(group<mps::PartitionSegment>("Thin partitions, one per `partitions` entry",
+                                                scene_keys, "partitions[]."));
+  groups.push_back(group("Observation points", scene_keys, "observe.",
+                         mps::ObserveKeys{observation_defaults, {}}));
+  groups.push_back(
+      group("The reference", scene_keys, "reference.", mps::ReferenceKeys{reference_defaults}));
+  for (const auto& kind : mps::kReferenceKinds) {
+    mps::visit_reference_kind(kind.value, reference_defaults, [&](const auto& keys) {
+      groups.push_back(group(fmt::format("The reference with kind: {}", kind.name), scene_keys,
+                             "reference.", keys));
+    });
+  }
+  Group sensors = group<mps::PressureProbeKeys>(
+      "Sensors of kind: probe_series, one per `reference.pressure_probes` or "
+      "`reference.depth_gauges` entry",
+      scene_keys, "reference.pressure_probes[].");
+  add_rows<mps::DepthGaugeKeys>(sensors, "reference.depth_gauges[].");
+  groups.push_back(std::move(sensors));
+  return groups;
+}
+
 const std::vector<Participant>& participants() {
   static const std::vector<Participant> list{
       {"fluid_mps",
-       "Scene geometry (`scene`), `restart`, `partitions`, `observe`, `reference`, `span`, "
-       "`sample_radius`, `displacement_radius`, `displacement_ramp` and `output_interval` are read "
-       "in `fluid_mps/process/fluid_config.cpp`.",
-       [] {
-         return std::vector<Group>{group<mps::MpsParameters>(
-             "MpsParameters", "fluid_mps/include/cosim/fluid_mps/parameters.hpp", "")};
-       }},
+       "A key of another scene or reference kind is refused as \"only used with kind: ...\". "
+       "The checks that need another section or a file (a reference's scene, a restart's "
+       "frames, whole cells of a 3D tank, the STL surfaces and measured records) are in "
+       "`fluid_mps/process/fluid_config.cpp` and `scene_3d.cpp`.",
+       fluid_groups},
       {"vegetation_beam",
        "`output_interval` is read in `vegetation_beam/process/vegetation_config.cpp`.",
        vegetation_groups},

@@ -47,6 +47,29 @@ class SectionReader {
     const std::string name(key.name);
     value = key.required ? section_.vector3(name) : section_.vector3(name, value);
   }
+  void operator()(const Key& key, Eigen::Vector2d& value) {
+    if (!usable(key)) return;
+    const std::string name(key.name);
+    value = key.required ? section_.vector2(name) : section_.vector2(name, value);
+  }
+  void operator()(const Key& key, std::vector<double>& values) {
+    if (!usable(key)) return;
+    const std::string name(key.name);
+    values = key.required ? section_.numbers(name, key.range)
+                          : section_.numbers(name, values, key.range);
+  }
+  void operator()(const Key& key, std::string& value) {
+    if (!usable(key)) return;
+    const std::string name(key.name);
+    value = key.required ? section_.text(name) : section_.text(name, value);
+  }
+  // A file named relative to the bundle, which must exist (written absolute into the resolved
+  // scenario); without a default an absent optional file stays empty.
+  void operator()(const Key& key, std::filesystem::path& value) {
+    if (!usable(key)) return;
+    const std::string name(key.name);
+    if (key.required || section_.has(name)) value = section_.existing_file(name);
+  }
   template <class E, std::size_t N>
   void operator()(const Key& key, E& value, const Choices<E, N>& choices) {
     if (!usable(key)) return;

@@ -22,6 +22,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstddef>
+#include <filesystem>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -186,6 +187,15 @@ class ParameterCheck {
   void operator()(const Key& key, const Eigen::Vector3d& value) const {
     if (key.active && !value.allFinite()) fail(key.name, "expected finite numbers");
   }
+  void operator()(const Key& key, const Eigen::Vector2d& value) const {
+    if (key.active && !value.allFinite()) fail(key.name, "expected finite numbers");
+  }
+  void operator()(const Key& key, const std::vector<double>& values) const {
+    for (double value : values) check(key, value);
+  }
+  // Texts and files: the parser checks a file exists; the library opens it and says what is wrong.
+  void operator()(const Key&, const std::string&) const {}
+  void operator()(const Key&, const std::filesystem::path&) const {}
   template <class E, std::size_t N>
   void operator()(const Key& key, const E& value, const Choices<E, N>& choices) const {
     if (key.active && choice_name(choices, value) == "?") fail(key.name, "not a known choice");
@@ -237,6 +247,22 @@ class KeyTable {
         fallback(key, "[" + format_number(value.x()) + ", " + format_number(value.y()) + ", " +
                           format_number(value.z()) + "]"),
         "");
+  }
+  void operator()(const Key& key, const Eigen::Vector2d& value) {
+    add(key, "[a, b]",
+        fallback(key, "[" + format_number(value.x()) + ", " + format_number(value.y()) + "]"), "");
+  }
+  // Each number of the list in the key's range.
+  void operator()(const Key& key, const std::vector<double>& values) {
+    std::string shown;
+    for (double value : values) shown += (shown.empty() ? "" : ", ") + format_number(value);
+    add(key, "list of numbers", fallback(key, "[" + shown + "]"));
+  }
+  void operator()(const Key& key, const std::string& value) {
+    add(key, "text", fallback(key, value), "");
+  }
+  void operator()(const Key& key, const std::filesystem::path& value) {
+    add(key, "file", fallback(key, value.string()), "relative to the bundle");
   }
   template <class E, std::size_t N>
   void operator()(const Key& key, const E& value, const Choices<E, N>& choices) {

@@ -49,6 +49,10 @@ class Section {
   }
   Eigen::Vector3d vector3(const std::string& key, const Eigen::Vector3d& fallback);
   Eigen::Vector3d vector3(const std::string& key);
+  Eigen::Vector2d vector2(const std::string& key, const Eigen::Vector2d& fallback);
+  Eigen::Vector2d vector2(const std::string& key);
+  std::vector<double> numbers(const std::string& key, const std::vector<double>& fallback,
+                              Range range);
   std::vector<double> numbers(const std::string& key, Range range = {});
   // A file named relative to the bundle folder; it must exist.
   std::filesystem::path existing_file(const std::string& key);

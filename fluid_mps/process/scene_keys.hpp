@@ -1,0 +1,730 @@
+// The nested keys of the `fluid_mps` section (the section's own keys, `scene` with one struct of
+// keys per kind, `scene.inflow`, `scene.obstacles`, `scene.solids`, `restart`, `partitions`,
+// `observe`, `reference` with one struct per kind), each declared once (visit_parameters,
+// cosim/scenario/parameters.hpp): fluid_config.cpp reads them with their ranges and rules, and
+// `cosim keys` lists them. The checks that need another section or a file's contents (a
+// reference's scene, a restart's frames, whole cells of a 3D tank) stay in fluid_config.cpp.
+//
+// A scene kind: a keys struct over the SceneSettings fields its builder reads (they stay flat,
+// as main.cpp and scene_3d.cpp build from them), a row in kSceneKinds and a case in
+// visit_scene_kind. Its keys are refused for every other kind as "only used with kind: ...".
+#pragma once
+
+#include <cmath>
+#include <concepts>
+#include <type_traits>
+
+#include "cosim/fluid_mps/boundaries.hpp"
+#include "cosim/scenario/parameters.hpp"
+#include "cosim/scenario/stl_section.hpp"
+#include "fluid_config.hpp"
+
+namespace cosim::mps {
+
+// span, the radii of the exchange with solids and output_interval, beside MpsParameters.
+struct FluidSectionKeys {
+  FluidConfig& config;
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, FluidSectionKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  FluidConfig& c = p.config;
+  v(Key("span")
+        .unit("m")
+        .in(Range::positive())
+        .doc("2D: the width along y the slice stands for (forces per width times span)"),
+    c.span);
+  // fluid_config.cpp sets the defaults that depend on l0 and the top level first.
+  v(Key("sample_radius")
+        .unit("m")
+        .in(Range::positive())
+        .shown_default("2 particle_spacing")
+        .doc("ensemble-average radius around solid nodes (seed 000 r_ev)"),
+    c.sample_radius);
+  v(Key("displacement_radius")
+        .unit("m")
+        .in(Range::non_negative())
+        .doc("> 0: the fluid leaves the solids' submerged volumes to them, spread this far (at "
+             "least the largest element); 0: none"),
+    c.displacement_radius);
+  v(Key("displacement_ramp")
+        .unit("s")
+        .in(Range::non_negative())
+        .doc("the displaced volumes grow from zero over this long (else the water is blasted away "
+             "in one step)"),
+    c.displacement_ramp);
+  v(Key("output_interval")
+        .unit("s")
+        .in(Range::positive())
+        .shown_default("the top level's output_interval")
+        .doc("between particle frames"),
+    c.output_interval);
+}
+
+enum class SceneKind {
+  dam_break,
+  still_water_tank,
+  periodic_channel,
+  open_channel,
+  pool_fishway,
+  periodic_pool,
+  flume
+};
+inline constexpr scenario::Choices<SceneKind, 7> kSceneKinds{
+    {{"dam_break", SceneKind::dam_break},
+     {"still_water_tank", SceneKind::still_water_tank},
+     {"periodic_channel", SceneKind::periodic_channel},
+     {"open_channel", SceneKind::open_channel},
+     {"pool_fishway", SceneKind::pool_fishway},
+     {"periodic_pool", SceneKind::periodic_pool},
+     {"flume", SceneKind::flume}}};
+
+// The keys every scene has: its kind, the walls, and in 3D the tank's width across.
+struct SceneKeys {
+  SceneSettings& scene;
+  SceneKind kind = SceneKind::dam_break;
+};
+
+// The water column of Martin & Moyce (1952) released in a closed tank.
+struct DamBreakKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = true, has_inflow = false;
+};
+struct StillWaterTankKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = true, has_inflow = false;
+};
+// A channel periodic along x, driven by the gravity tilt and a pressure drop (seed 000 3.1).
+struct PeriodicChannelKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = false, has_inflow = false;
+};
+// A channel fed by seed 001's soluble moving wall, with a free outfall.
+struct OpenChannelKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = false, has_inflow = true;
+};
+// Seed 001's stepped pool-and-weir fishway, fed by the moving wall.
+struct PoolFishwayKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = false, has_inflow = true;
+};
+// One pool of the fishway, periodic with a step drop (seed 001 Run-OC).
+struct PeriodicPoolKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = false, has_inflow = false;
+};
+
+// A straight 3D channel for a debris flow (seed 004): bed z = 0 over x in [0, length], side
+// walls at y = 0 and y = width, end walls at x = 0 and x = length, all wall_height high (the
+// debris_dem flume's keys, so one YAML anchor gives both), and a reservoir `water` across the
+// whole width, at rest until t = 0. The slope is the world's (world.slope_degrees: x along the
+// bed, gravity tilted, docs/architecture.md), so the bed lies on the lattice, where the DEM's
+// triangles are. The sizes must be whole cells of particle_spacing (fluid_config.cpp).
+struct FlumeKeys {
+  SceneSettings& scene;
+  static constexpr bool builds_3d = true, has_inflow = false;
+};
+// The flume's reservoir: x from x_min to x_max, `depth` deep.
+struct FlumeWaterKeys {
+  SceneSettings& scene;
+  double x_max = 0;
+};
+
+// Calls f(keys) with the keys struct of `kind` over `scene`.
+template <class F>
+void visit_scene_kind(SceneKind kind, SceneSettings& scene, F&& f) {
+  switch (kind) {
+    case SceneKind::dam_break: {
+      DamBreakKeys keys{scene};
+      f(keys);
+      return;
+    }
+    case SceneKind::still_water_tank: {
+      StillWaterTankKeys keys{scene};
+      f(keys);
+      return;
+    }
+    case SceneKind::periodic_channel: {
+      PeriodicChannelKeys keys{scene};
+      f(keys);
+      return;
+    }
+    case SceneKind::open_channel: {
+      OpenChannelKeys keys{scene};
+      f(keys);
+      return;
+    }
+    case SceneKind::pool_fishway: {
+      PoolFishwayKeys keys{scene};
+      f(keys);
+      return;
+    }
+    case SceneKind::periodic_pool: {
+      PeriodicPoolKeys keys{scene};
+      f(keys);
+      return;
+    }
+    case SceneKind::flume: {
+      FlumeKeys keys{scene};
+      f(keys);
+      return;
+    }
+  }
+}
+
+inline bool builds_3d(SceneKind kind) {
+  SceneSettings unused;
+  bool result = false;
+  visit_scene_kind(kind, unused, [&](const auto& keys) { result = keys.builds_3d; });
+  return result;
+}
+inline bool has_inflow(SceneKind kind) {
+  SceneSettings unused;
+  bool result = false;
+  visit_scene_kind(kind, unused, [&](const auto& keys) { result = keys.has_inflow; });
+  return result;
+}
+
+// "dam_break, still_water_tank": the kinds for which `test` holds.
+template <class Test>
+std::string scene_kinds_where(Test test) {
+  std::string names;
+  for (const auto& c : kSceneKinds) {
+    if (test(c.value)) names += (names.empty() ? "" : ", ") + std::string(c.name);
+  }
+  return names;
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, SceneKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  const bool three_d = s.dimension == 3;
+  v(Key("kind").needed().doc("which scene is built; its keys are listed per kind below"), p.kind,
+    kSceneKinds);
+  const std::string in_3d = scene_kinds_where(builds_3d);
+  v.rule("kind", !three_d || builds_3d(p.kind),
+         "this kind has no 3D scene (dimension: 3 builds " + in_3d + ")");
+  v.rule("kind", three_d || p.kind != SceneKind::flume,
+         "'flume' is a 3D scene: it needs dimension: 3 (a 2D sloping channel is open_channel or "
+         "periodic_channel)");
+  v(Key("tank_width")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .only_with(three_d && p.kind != SceneKind::flume, "dimension: 3 (a flume's is width)")
+        .doc("the tank across (y), between two side walls"),
+    s.tank_width);
+  v(Key("wall_layers").in(Range::between(1, 10)).doc("wall particles carrying pressure"),
+    s.wall_layers);
+  v(Key("dummy_layers").in(Range::between(0, 10)).doc("dummy particles behind the walls"),
+    s.dummy_layers);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, DamBreakKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  v(Key("column_width").unit("m").in(Range::positive()).needed().doc("a: the column along x"),
+    s.column_width);
+  v(Key("column_height").unit("m").in(Range::positive()).needed().doc("of the water column"),
+    s.column_height);
+  v(Key("tank_length").unit("m").in(Range::positive()).needed().doc("the tank along x"),
+    s.tank_length);
+  v.rule("tank_length", s.tank_length >= s.column_width, "shorter than the water column");
+  v(Key("tank_height").unit("m").in(Range::positive()).needed().doc("of the tank's walls"),
+    s.tank_height);
+  // The column may stand anywhere along the tank (SPHERIC test 2: against the far wall).
+  v(Key("column_x")
+        .unit("m")
+        .in(Range::non_negative())
+        .only_with(s.dimension == 3, "dimension: 3")
+        .doc("the column's upstream face"),
+    s.column_x);
+  v.rule("column_x", s.column_x + s.column_width <= s.tank_length + 1e-12,
+         "the column (column_x + column_width) ends beyond the tank");
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, StillWaterTankKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  v(Key("width").unit("m").in(Range::positive()).needed().doc("the tank along x"), s.width);
+  v(Key("depth").unit("m").in(Range::positive()).needed().doc("of the still water"), s.depth);
+  v(Key("tank_height").unit("m").in(Range::positive()).needed().doc("of the tank's walls"),
+    s.tank_height);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PeriodicChannelKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  v(Key("length")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .doc("one period along x (the bed slope is the world's gravity tilt)"),
+    s.length);
+  v(Key("depth").unit("m").in(Range::positive()).needed().doc("of the water"), s.depth);
+  v(Key("driving_pressure_drop").unit("Pa").doc("p(x_min) - p(x_max) over one period"),
+    s.driving_pressure_drop);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, OpenChannelKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  v(Key("length").unit("m").in(Range::positive()).needed().doc("of the bed (slope: gravity tilt)"),
+    s.length);
+  v(Key("initial_depth").unit("m").in(Range::non_negative()).needed().doc("water at the start"),
+    s.depth);
+  v(Key("block_height")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .doc("of the soluble moving wall block, above the backed-up level"),
+    s.block_height);
+  v(Key("block_columns").in(Range::between(1, 100)).doc("columns of the moving wall block"),
+    s.block_columns);
+  v(Key("pool_particles").in(Range::between(1, 1e7)).doc("recycled particles for the inflow"),
+    s.pool_particles);
+  // Seed 000 section 4's outlet beyond `length` (boundaries.hpp, ChannelOutlet).
+  v(Key("outlet_flat_length")
+        .unit("m")
+        .in(Range::non_negative())
+        .doc("a bed level in the world after the sloping reach; 0 with no slope: free overfall"),
+    s.outlet.flat_length);
+  v(Key("outlet_slope_height")
+        .unit("m")
+        .in(Range::non_negative())
+        .doc("height of the 1:1 adverse slope at the end of the level bed, free overfall at "
+             "its crest; 0: none"),
+    s.outlet.slope_height);
+}
+
+// The pools of both fishway kinds.
+template <class V>
+void visit_fishway_pools(FishwayGeometry& g, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("pool_length").unit("m").in(Range::positive()).doc("crest to crest"), g.pool_length);
+  v(Key("step_height").unit("m").in(Range::non_negative()).doc("floor drop between pools"),
+    g.step_height);
+  v(Key("weir_height").unit("m").in(Range::positive()).doc("crest above the pool's floor"),
+    g.weir_height);
+  v(Key("orifice_height")
+        .unit("m")
+        .in(Range::non_negative())
+        .doc("opening at the foot of every partition (seed 001: 0.02); 0: none"),
+    g.orifice_height);
+  v.rule("orifice_height", g.orifice_height < g.weir_height, "must be below the crest");
+  v(Key("partition_columns").in(Range::between(1, 10)).doc("wall particles across a partition"),
+    g.partition_columns);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PoolFishwayKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  FishwayGeometry& g = s.fishway;
+  visit_fishway_pools(g, v);
+  v(Key("pools").in(Range::between(1, 100)).doc("pools in a row"), g.pools);
+  v(Key("outlet_length").unit("m").in(Range::positive()).doc("apron after the last weir"),
+    g.outlet_length);
+  v(Key("block_height")
+        .unit("m")
+        .in(Range::positive())
+        .doc("of the moving wall above the first pool's floor; above the initial water level"),
+    g.block_height);
+  v(Key("block_columns").in(Range::between(1, 100)).doc("columns of the moving wall block"),
+    g.block_columns);
+  v(Key("pool_particles").in(Range::between(1, 1e7)).doc("recycled particles for the inflow"),
+    g.pool_particles);
+  // Read after the inflow (fluid_config.cpp), whose discharge sets the head.
+  v(Key("fill_to_weir_head")
+        .only_with(s.inflow.control == OpenBoundarySettings::Control::discharge,
+                   "inflow.control: discharge")
+        .doc("start the pools at the Rehbock weir head of the inflow discharge above the crests"),
+    s.fill_to_weir_head);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, FlumeKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  v(Key("length").unit("m").in(Range::positive()).needed().doc("of the bed, along x"),
+    s.tank_length);
+  v(Key("width").unit("m").in(Range::positive()).needed().doc("between the side walls (y)"),
+    s.tank_width);
+  v(Key("wall_height").unit("m").in(Range::positive()).needed().doc("of every wall"),
+    s.tank_height);
+  // The water running off a flume's end: the end wall behind it is only the lattice's edge, and
+  // the surge never slams into it (mps::remove_fluid_beyond).
+  v(Key("outlet_x")
+        .unit("m")
+        .in(Range::positive())
+        .shown_default("none")
+        .doc("fluid past this x leaves the flow; between the water's x_max and the end"),
+    s.outlet_x);
+  v.rule("outlet_x", !std::isfinite(s.outlet_x) || s.outlet_x < s.tank_length,
+         "must lie between the water's x_max and the flume's end");
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, FlumeWaterKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  v(Key("x_min").unit("m").in(Range::non_negative()).doc("the reservoir's upstream face"),
+    s.column_x);
+  v(Key("x_max").unit("m").in(Range::positive()).needed().doc("its downstream face"), p.x_max);
+  v.rule("x_max", p.x_max > s.column_x, "must exceed x_min");
+  v.rule("x_max", p.x_max <= s.tank_length + 1e-12, "the water ends beyond the flume");
+  v(Key("depth").unit("m").in(Range::positive()).needed().doc("of the water, normal to the bed"),
+    s.column_height);
+  v.rule("depth", s.column_height <= s.tank_height, "exceeds the flume's wall_height");
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PeriodicPoolKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  SceneSettings& s = p.scene;
+  visit_fishway_pools(s.fishway, v);
+  v(Key("fill_discharge")
+        .unit("m^2/s")
+        .in(Range::positive())
+        .needed()
+        .doc("filled to the crest plus the Rehbock head of this discharge per width"),
+    s.fill_discharge);
+}
+
+inline constexpr scenario::Choices<OpenBoundarySettings::Control, 3> kInflowControls{
+    {{"velocity", OpenBoundarySettings::Control::velocity},
+     {"discharge", OpenBoundarySettings::Control::discharge},
+     {"level", OpenBoundarySettings::Control::level}}};
+
+// `scene.inflow`: seed 001's soluble moving wall (boundaries.hpp).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, OpenBoundarySettings>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  using Control = OpenBoundarySettings::Control;
+  v(Key("control").doc(
+        "velocity: a fixed wall speed; discharge: seed 001's level adjustment keeping q; level: "
+        "a controller keeping target_level"),
+    p.control, kInflowControls);
+  v(Key("discharge")
+        .unit("m^2/s")
+        .in(Range::positive())
+        .needed()
+        .only_with(p.control == Control::discharge, "control: discharge")
+        .doc("q per unit width"),
+    p.discharge);
+  const bool level = p.control == Control::level;
+  v(Key("target_level")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .only_with(level, "control: level")
+        .doc("kept above the bed"),
+    p.target_level);
+  v(Key("level_gain")
+        .unit("1/s^2")
+        .in(Range::positive())
+        .only_with(level, "control: level")
+        .doc("dU/dt per metre of level error"),
+    p.level_gain);
+  v(Key("velocity")
+        .unit("m/s")
+        .in(Range::non_negative())
+        .doc("of the wall (control: velocity), its start otherwise"),
+    p.velocity);
+  v(Key("inflow_rows")
+        .in(Range::between(1, 1000))
+        .doc("rows a column releases (control: velocity), the first column's otherwise"),
+    p.inflow_rows);
+  v(Key("min_velocity").unit("m/s").in(Range::non_negative()).doc("slowest wall"), p.min_velocity);
+  v(Key("max_velocity").unit("m/s").in(Range::positive()).doc("fastest wall"), p.max_velocity);
+  v(Key("ramp_time")
+        .unit("s")
+        .in(Range::non_negative())
+        .doc("soft start: the wall speed rises from 0 over this long; 0: none"),
+    p.ramp_time);
+}
+
+// A `scene.obstacles` entry (3D): a solid box, world corners.
+struct ObstacleKeys {
+  Eigen::Vector3d min = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max = Eigen::Vector3d::Zero();
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ObstacleKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  v(Key("min").unit("m").needed().doc("lower corner, world [x, y, z]"), p.min);
+  v(Key("max").unit("m").needed().doc("upper corner"), p.max);
+  v.rule("max", (p.max - p.min).minCoeff() > 0, "must exceed min in x, y and z");
+}
+
+// A `scene.solids` entry (3D): a closed STL surface (scene_3d.hpp reads and checks it).
+// A `solids` entry: scenario::StlEntryKeys (stl_section.hpp), shared with debris_dem's walls.
+using StlSolidKeys = scenario::StlEntryKeys;
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, RestartSettings>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  v(Key("file").needed().doc("an output file (particles.h5) of an earlier run"), p.file);
+  v(Key("frame").doc("which of its frames; negative: from the end (-1: the last)"), p.frame);
+}
+
+// A `partitions` entry: a thin wall no fluid pair sees through (seed 001 2.2(1)).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PartitionSegment>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  v(Key("from").unit("m").needed().doc("one end, world [x, z] (the fluid's plane)"), p.a);
+  v(Key("to").unit("m").needed().doc("the other end, world [x, z]"), p.b);
+  v(Key("keep_walls").doc("cut fluid pairs only: the partition's walls are seen from both sides"),
+    p.keep_walls);
+}
+
+// `observe`: Eulerian points recorded every window; the points are given in the world frame and
+// turned into the solver's by fluid_config.cpp.
+struct ObserveKeys {
+  ObservationSettings& observation;
+  std::vector<double> points;
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ObserveKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("points").unit("m").needed().doc("a flat list of world x, y, z triples"), p.points);
+  v.rule("points", !p.points.empty() && p.points.size() % 3 == 0,
+         "expected a flat list of x, y, z triples");
+  // fluid_config.cpp sets the default from l0 first.
+  v(Key("radius")
+        .unit("m")
+        .in(Range::positive())
+        .shown_default("2 particle_spacing")
+        .doc("velocity and water presence averaged within it"),
+    p.observation.radius);
+  v(Key("average_from").unit("s").in(Range::non_negative()).doc("time means start here"),
+    p.observation.average_from);
+}
+
+enum class ReferenceKind { martin_moyce, hydrostatic, canopy_balance, weirs, probe_series };
+inline constexpr scenario::Choices<ReferenceKind, 5> kReferenceKinds{
+    {{"martin_moyce", ReferenceKind::martin_moyce},
+     {"hydrostatic", ReferenceKind::hydrostatic},
+     {"canopy_balance", ReferenceKind::canopy_balance},
+     {"weirs", ReferenceKind::weirs},
+     {"probe_series", ReferenceKind::probe_series}}};
+
+struct ReferenceKeys {
+  ReferenceSettings& reference;
+  ReferenceKind kind = ReferenceKind::martin_moyce;
+};
+struct MartinMoyceKeys {
+  ReferenceSettings& reference;
+};
+struct HydrostaticKeys {
+  ReferenceSettings& reference;
+};
+struct CanopyBalanceKeys {
+  ReferenceSettings& reference;
+};
+struct WeirsKeys {
+  ReferenceSettings& reference;
+};
+struct ProbeSeriesKeys {
+  ReferenceSettings& reference;
+};
+
+template <class F>
+void visit_reference_kind(ReferenceKind kind, ReferenceSettings& reference, F&& f) {
+  switch (kind) {
+    case ReferenceKind::martin_moyce: {
+      MartinMoyceKeys keys{reference};
+      f(keys);
+      return;
+    }
+    case ReferenceKind::hydrostatic: {
+      HydrostaticKeys keys{reference};
+      f(keys);
+      return;
+    }
+    case ReferenceKind::canopy_balance: {
+      CanopyBalanceKeys keys{reference};
+      f(keys);
+      return;
+    }
+    case ReferenceKind::weirs: {
+      WeirsKeys keys{reference};
+      f(keys);
+      return;
+    }
+    case ReferenceKind::probe_series: {
+      ProbeSeriesKeys keys{reference};
+      f(keys);
+      return;
+    }
+  }
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ReferenceKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  v(Key("kind").needed().doc(
+        "martin_moyce: surge front and residual column (dam_break); hydrostatic: pressure at "
+        "depth; canopy_balance: inflection at the canopy top (periodic_channel with observe); "
+        "weirs: Rehbock head at every crest (fishways); probe_series: sensors against a "
+        "measured record"),
+    p.kind, kReferenceKinds);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, MartinMoyceKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("file").needed().doc("the measured curves (references/martin_moyce_1952.csv)"),
+    p.reference.file);
+  v(Key("column_width").unit("m").in(Range::positive()).needed().doc("a, the curves' scale"),
+    p.reference.column_width);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, HydrostaticKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  ReferenceSettings& r = p.reference;
+  v(Key("still_depth").unit("m").in(Range::positive()).needed().doc("of the still surface"),
+    r.still_depth);
+  v(Key("probe_x").unit("m").needed().doc("world x of the probes (y: mid-tank)"), r.probe_x);
+  v(Key("probe_depths").unit("m").in(Range::positive()).needed().doc("below the still surface"),
+    r.probe_depths);
+  v(Key("average_from").unit("s").in(Range::non_negative()).doc("time means start here"),
+    r.average_from);
+  // fluid_config.cpp sets the default from l0 first.
+  v(Key("probe_radius")
+        .unit("m")
+        .in(Range::positive())
+        .shown_default("1.5 particle_spacing")
+        .doc("particles within it are averaged"),
+    r.probe_radius);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, CanopyBalanceKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("canopy_height")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .doc("where u(z) should inflect; time means from observe.average_from"),
+    p.reference.canopy_height);
+  // Nepf (2012) shear-layer penetration delta_e = 0.23 / (C_D a), reported when both are given.
+  v(Key("drag_coefficient")
+        .in(Range::non_negative())
+        .doc("C_D of the canopy's stems, for Nepf's delta_e; 0: not reported"),
+    p.reference.drag_coefficient);
+  v(Key("frontal_area")
+        .unit("1/m")
+        .in(Range::non_negative())
+        .doc("a = n d, frontal area per volume, for Nepf's delta_e; 0: not reported"),
+    p.reference.frontal_area);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, WeirsKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("average_from").unit("s").in(Range::non_negative()).needed().doc("time means start here"),
+    p.reference.average_from);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ProbeSeriesKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  ProbeSeriesSettings& s = p.reference.probes;
+  v(Key("file").needed().doc("the measured record: a CSV, '#' comments, a header, time first"),
+    p.reference.file);
+  // fluid_config.cpp sets the defaults from l0 first.
+  v(Key("probe_radius")
+        .unit("m")
+        .in(Range::positive())
+        .shown_default("1.5 particle_spacing")
+        .doc("a pressure probe averages fluid and wall particles within it"),
+    s.probe_radius);
+  v(Key("gauge_half_width")
+        .unit("m")
+        .in(Range::positive())
+        .shown_default("2 particle_spacing")
+        .doc("half-width of a depth gauge's bilinear tent"),
+    s.gauge_half_width);
+  v(Key("arrival_fraction")
+        .in(Range{0.0, 1.0, true})
+        .doc("arrival: the first time a probe reads this fraction of its measured peak"),
+    s.arrival_fraction);
+}
+
+// A `reference.pressure_probes` or `reference.depth_gauges` entry, as the scenario gives it.
+struct PressureProbeKeys {
+  std::string column;
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+};
+struct DepthGaugeKeys {
+  std::string column;
+  Eigen::Vector2d at = Eigen::Vector2d::Zero();
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, PressureProbeKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  v(Key("column").needed().doc("of the measured record"), p.column);
+  v(Key("at").unit("m").needed().doc("world [x, y, z] of the sensor"), p.at);
+}
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, DepthGaugeKeys>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  v(Key("column").needed().doc("of the measured record"), p.column);
+  v(Key("at").unit("m").needed().doc("world [x, y] of the gauge; its depth is along z"), p.at);
+}
+
+}  // namespace cosim::mps
