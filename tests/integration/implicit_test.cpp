@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 #include "command.hpp"
@@ -81,6 +83,57 @@ TEST(ImplicitCoupling, OneIterationPerWindowIsTheSerialExplicitSchemeBitForBit) 
                      one.folder / "vegetation_beam" / "plants.h5");
   EXPECT_EQ(info_of(one.summary, "vegetation_beam")["drag_impulse"],
             info_of(explicit_run.summary, "vegetation_beam")["drag_impulse"]);
+}
+
+// The light blade in the surge, iterated: windows take several iterations while the surge loads
+// the blade, every window converges (no window at the limit in the first 0.15 s), and summary.json
+// counts them.
+TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
+  const auto run = run_light_blade(
+      "iqn-ils", "--set duration=0.15 --set coupling.scheme=serial-implicit "
+                 "--set coupling.implicit.acceleration=iqn-ils");
+  ASSERT_FALSE(run.folder.empty());
+  ASSERT_TRUE(run.summary["ok"].get<bool>()) << run.summary.dump(2);
+  const auto& implicit = run.summary["implicit"];
+  ASSERT_TRUE(implicit.is_object()) << run.summary.dump(2);
+  EXPECT_EQ(implicit["acceleration"], "iqn-ils");
+  const auto per_window = implicit["iterations_per_window"].get<std::vector<int>>();
+  ASSERT_EQ(static_cast<int64_t>(per_window.size()), run.summary["windows_completed"]);
+  int total = 0;
+  int most = 0;
+  for (const int n : per_window) {
+    EXPECT_GE(n, 1);
+    total += n;
+    most = std::max(most, n);
+  }
+  EXPECT_EQ(implicit["iterations_total"], total);
+  EXPECT_EQ(implicit["iterations_max"], most);
+  EXPECT_EQ(implicit["windows_at_max_iterations"], 0);
+  // While the surge loads the blade the drag changes within a window: a second iteration is
+  // needed there, and the accelerator converges well before the limit.
+  EXPECT_GT(most, 1);
+  EXPECT_LT(most, implicit["max_iterations"].get<int>());
+  std::printf("iterations per window: mean %.2f, max %d, total %d over %zu windows\n",
+              implicit["iterations_mean"].get<double>(), most, total, per_window.size());
+}
+
+// The limit: with at_max_iterations: stop, a window that cannot converge in its iterations
+// stops the run naming the window.
+TEST(ImplicitCoupling, AWindowAtTheLimitStopsTheRunWhenAskedTo) {
+  const auto runs = fresh_folder("implicit-stop");
+  const auto result = run_cosim(
+      fmt::format("run {} --runs-dir {} --quiet --set duration=0.15 "
+                  "--set coupling.scheme=serial-implicit --set coupling.implicit.max_iterations=2 "
+                  "--set coupling.implicit.relative_tolerance=1e-12 "
+                  "--set coupling.implicit.absolute_force=0 --set coupling.implicit.absolute_position=0 "
+                  "--set coupling.implicit.absolute_velocity=0 "
+                  "--set coupling.implicit.at_max_iterations=stop",
+                  test_scene("light_blade").string(), runs.string()),
+      120);
+  EXPECT_NE(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("did not converge in 2 coupling iterations"), std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("at_max_iterations: stop"), std::string::npos) << result.output;
 }
 
 }  // namespace
