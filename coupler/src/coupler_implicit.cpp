@@ -124,10 +124,10 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
     while (true) {
       if (auto values = bus_->field_values(key)) return std::move(*values);
       if (seconds_since(start) > scene_.coupling.timeout) {
-        throw Failure(fmt::format("'{}' did not deliver its field '{}' of {}, iteration {}, "
-                                  "within {:.1f} s",
-                                  sender, name, window_text(index), iteration,
-                                  scene_.coupling.timeout));
+        throw Failure(
+            fmt::format("'{}' did not deliver its field '{}' of {}, iteration {}, "
+                        "within {:.1f} s",
+                        sender, name, window_text(index), iteration, scene_.coupling.timeout));
       }
       if (seconds_since(last_request) >= resend) {
         bus_->request_field(key);
@@ -187,9 +187,9 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
     const auto [time, dt] = plan_[index];
     const Stamp stamp{index, time, dt, iteration};
     for (const auto& block : blocks) {
-      bus_->publish_field(stamp, block.input,
-                          std::span<const double>(x.data() + block.offset,
-                                                  static_cast<std::size_t>(block.size)));
+      bus_->publish_field(
+          stamp, block.input,
+          std::span<const double>(x.data() + block.offset, static_cast<std::size_t>(block.size)));
     }
     for (const auto& solid : solids) {
       if (exchange::displaces_water(solid)) {

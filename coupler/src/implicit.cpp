@@ -12,17 +12,15 @@ ConvergenceMeasure measure_convergence(const std::vector<FieldBlock>& blocks,
   ConvergenceMeasure measure;
   for (const auto& block : blocks) {
     if (block.size == 0) continue;
-    const double change = (h.segment(block.offset, block.size) - x.segment(block.offset, block.size))
-                              .norm();
+    const double change =
+        (h.segment(block.offset, block.size) - x.segment(block.offset, block.size)).norm();
     const double size = h.segment(block.offset, block.size).norm();
     const double rms = change / std::sqrt(static_cast<double>(block.size));
     const double inf = std::numeric_limits<double>::infinity();
     const double by_relative = relative * size > 0.0 ? change / (relative * size)
                                : change == 0.0       ? 0.0
                                                      : inf;
-    const double by_absolute = block.absolute > 0.0 ? rms / block.absolute
-                               : rms == 0.0         ? 0.0
-                                                    : inf;
+    const double by_absolute = block.absolute > 0.0 ? rms / block.absolute : rms == 0.0 ? 0.0 : inf;
     double ratio = std::min(by_relative, by_absolute);
     if (!std::isfinite(change)) ratio = inf;  // NaN: never converged
     if (ratio > 1.0) measure.converged = false;

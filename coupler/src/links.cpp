@@ -33,8 +33,7 @@ void SolidLink::publish_state(std::span<const Eigen::Vector3d> positions,
   }
 }
 
-AmbientFlow SolidLink::receive(const std::string& sender, int64_t flow_window,
-                               int32_t iteration) {
+AmbientFlow SolidLink::receive(const std::string& sender, int64_t flow_window, int32_t iteration) {
   const auto key = std::tuple(sender, flow_window, iteration);
   if (const auto cached = cache_.find(key); cached != cache_.end()) return cached->second;
   AmbientFlow flow;
@@ -54,10 +53,11 @@ AmbientFlow SolidLink::receive(const std::string& sender, int64_t flow_window,
       participant_.receive(sender, exchange::surface_field(me), flow_window, iteration);
   if (flow.surface_elevation.size() != point_count_) {
     throw CouplingError(fmt::format("field '{}' from '{}' (window {}): expected {} values, got {}",
-                                    exchange::surface_field(me), sender, flow_window,
-                                    point_count_, flow.surface_elevation.size()));
+                                    exchange::surface_field(me), sender, flow_window, point_count_,
+                                    flow.surface_elevation.size()));
   }
-  std::erase_if(cache_, [&](const auto& item) { return std::get<1>(item.first) < flow_window - 1; });
+  std::erase_if(cache_,
+                [&](const auto& item) { return std::get<1>(item.first) < flow_window - 1; });
   cache_[key] = flow;
   return flow;
 }
@@ -91,9 +91,7 @@ std::vector<SolidForcing> FlowLink::receive_solids(const Window& window, bool wi
   const bool relaxed = implicit_ && window.iteration > 0;
   const int64_t solid_window =
       relaxed ? window.index : exchange::solid_window_for_flow(window.index);
-  const int32_t iteration = relaxed       ? window.iteration
-                            : implicit_ ? window.accepted_iteration
-                                        : 0;
+  const int32_t iteration = relaxed ? window.iteration : implicit_ ? window.accepted_iteration : 0;
   // The drag of window k-1 acted on the solids for dt_{k-1}; spread over dt_k it gives the flow
   // the same impulse (adaptive windows change length). The relaxed drag is of window k already.
   const double impulse_scale = relaxed ? 1.0 : window.dt > 0.0 ? previous_dt_ / window.dt : 0.0;

@@ -88,9 +88,9 @@ WorldSettings parse_world(Section world) {
 
 CouplingSettings parse_coupling(Section coupling) {
   CouplingSettings settings;
-  settings.scheme =
-      coupling.text("scheme", settings.scheme,
-                    {"serial-explicit", "parallel-explicit", "serial-implicit", "parallel-implicit"});
+  settings.scheme = coupling.text(
+      "scheme", settings.scheme,
+      {"serial-explicit", "parallel-explicit", "serial-implicit", "parallel-implicit"});
   if (settings.is_implicit() || coupling.has("implicit")) {
     if (!settings.is_implicit()) {
       coupling.fail("implicit", "is read only with scheme serial-implicit or parallel-implicit");

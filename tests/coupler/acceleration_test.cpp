@@ -24,10 +24,9 @@ struct LinearMap {
 LinearMap expanding_map(double shift = 0.0) {
   const Eigen::VectorXd eigenvalues = (Eigen::VectorXd(5) << -2.5, -1.2, 0.3, 0.6, 0.9).finished();
   const Eigen::MatrixXd basis =
-      Eigen::HouseholderQR<Eigen::MatrixXd>(
-          (Eigen::MatrixXd(5, 5) << 1, 2, 0, 1, 3, 0, 1, 4, 1, 0, 2, 0, 1, 3, 1, 1, 1, 1, 0, 2, 3,
-           0, 2, 1, 1)
-              .finished())
+      Eigen::HouseholderQR<Eigen::MatrixXd>((Eigen::MatrixXd(5, 5) << 1, 2, 0, 1, 3, 0, 1, 4, 1, 0,
+                                             2, 0, 1, 3, 1, 1, 1, 1, 0, 2, 3, 0, 2, 1, 1)
+                                                .finished())
           .householderQ();
   LinearMap map;
   map.a = basis * eigenvalues.asDiagonal() * basis.transpose();

@@ -32,10 +32,10 @@ struct Run {
 
 Run run_light_blade(const std::string& label, const std::string& options, int limit = 120) {
   const auto runs = fresh_folder("implicit-" + label);
-  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet {}",
-                                            test_scene("light_blade").string(), runs.string(),
-                                            options),
-                                limit);
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet {}", test_scene("light_blade").string(),
+                            runs.string(), options),
+                limit);
   Run run;
   run.folder = run_folder_of(result);
   EXPECT_FALSE(run.folder.empty()) << result.output;
@@ -65,10 +65,9 @@ void expect_same_frames(const std::filesystem::path& a, const std::filesystem::p
 
 TEST(ImplicitCoupling, OneIterationPerWindowIsTheSerialExplicitSchemeBitForBit) {
   const auto explicit_run = run_light_blade("explicit", "--set duration=0.06");
-  const auto one = run_light_blade(
-      "one-iteration",
-      "--set duration=0.06 --set coupling.scheme=serial-implicit "
-      "--set coupling.implicit.max_iterations=1");
+  const auto one = run_light_blade("one-iteration",
+                                   "--set duration=0.06 --set coupling.scheme=serial-implicit "
+                                   "--set coupling.implicit.max_iterations=1");
   ASSERT_FALSE(explicit_run.folder.empty());
   ASSERT_FALSE(one.folder.empty());
   ASSERT_TRUE(explicit_run.summary["ok"].get<bool>()) << explicit_run.summary.dump(2);
@@ -89,9 +88,9 @@ TEST(ImplicitCoupling, OneIterationPerWindowIsTheSerialExplicitSchemeBitForBit) 
 // the blade, every window converges (no window at the limit in the first 0.15 s), and summary.json
 // counts them.
 TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
-  const auto run = run_light_blade(
-      "iqn-ils", "--set duration=0.15 --set coupling.scheme=serial-implicit "
-                 "--set coupling.implicit.acceleration=iqn-ils");
+  const auto run = run_light_blade("iqn-ils",
+                                   "--set duration=0.15 --set coupling.scheme=serial-implicit "
+                                   "--set coupling.implicit.acceleration=iqn-ils");
   ASSERT_FALSE(run.folder.empty());
   ASSERT_TRUE(run.summary["ok"].get<bool>()) << run.summary.dump(2);
   const auto& implicit = run.summary["implicit"];
@@ -115,6 +114,14 @@ TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
   EXPECT_LT(most, implicit["max_iterations"].get<int>());
   std::printf("iterations per window: mean %.2f, max %d, total %d over %zu windows\n",
               implicit["iterations_mean"].get<double>(), most, total, per_window.size());
+  // A replay plays one answer per window: it refuses a run that iterated, before anything runs.
+  const auto replay =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run.folder.string(), fresh_folder("implicit-replay").string()),
+                60);
+  EXPECT_NE(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("cannot follow coupling iterations"), std::string::npos)
+      << replay.output;
 }
 
 // The limit: with at_max_iterations: stop, a window that cannot converge in its iterations
@@ -122,13 +129,14 @@ TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
 TEST(ImplicitCoupling, AWindowAtTheLimitStopsTheRunWhenAskedTo) {
   const auto runs = fresh_folder("implicit-stop");
   const auto result = run_cosim(
-      fmt::format("run {} --runs-dir {} --quiet --set duration=0.15 "
-                  "--set coupling.scheme=serial-implicit --set coupling.implicit.max_iterations=2 "
-                  "--set coupling.implicit.relative_tolerance=1e-12 "
-                  "--set coupling.implicit.absolute_force=0 --set coupling.implicit.absolute_position=0 "
-                  "--set coupling.implicit.absolute_velocity=0 "
-                  "--set coupling.implicit.at_max_iterations=stop",
-                  test_scene("light_blade").string(), runs.string()),
+      fmt::format(
+          "run {} --runs-dir {} --quiet --set duration=0.15 "
+          "--set coupling.scheme=serial-implicit --set coupling.implicit.max_iterations=2 "
+          "--set coupling.implicit.relative_tolerance=1e-12 "
+          "--set coupling.implicit.absolute_force=0 --set coupling.implicit.absolute_position=0 "
+          "--set coupling.implicit.absolute_velocity=0 "
+          "--set coupling.implicit.at_max_iterations=stop",
+          test_scene("light_blade").string(), runs.string()),
       120);
   EXPECT_NE(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("did not converge in 2 coupling iterations"), std::string::npos)

@@ -10,9 +10,9 @@
 namespace cosim::coupler {
 
 struct FieldBlock {
-  std::string sender;  // who publishes the field as H(x)
-  std::string field;   // its name there ("drag", "ambient_velocity@vegetation_beam")
-  std::string input;   // the name the coupler publishes the next input under
+  std::string sender;     // who publishes the field as H(x)
+  std::string field;      // its name there ("drag", "ambient_velocity@vegetation_beam")
+  std::string input;      // the name the coupler publishes the next input under
   double absolute = 0.0;  // root-mean-square change below which it counts as converged [its unit]
   Eigen::Index offset = 0;
   Eigen::Index size = 0;

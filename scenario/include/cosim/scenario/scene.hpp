@@ -59,15 +59,9 @@ void visit_parameters(P& p, V& v) {
         .in(Range::non_negative())
         .doc("or when the root-mean-square change of a force field is below this"),
     p.absolute_force);
-  v(Key("absolute_position")
-        .unit("m")
-        .in(Range::non_negative())
-        .doc("the same for positions"),
+  v(Key("absolute_position").unit("m").in(Range::non_negative()).doc("the same for positions"),
     p.absolute_position);
-  v(Key("absolute_velocity")
-        .unit("m/s")
-        .in(Range::non_negative())
-        .doc("the same for velocities"),
+  v(Key("absolute_velocity").unit("m/s").in(Range::non_negative()).doc("the same for velocities"),
     p.absolute_velocity);
   v(Key("at_max_iterations")
         .doc("a window not converged in max_iterations: continue (a warning, counted in "
@@ -99,11 +93,11 @@ struct CouplingSettings {
   ImplicitSettings implicit;
   bool is_implicit() const { return scheme.ends_with("-implicit"); }
   bool is_serial() const { return scheme.starts_with("serial-"); }
-  double window = 1e-3;                    // fixed window length [s]
-  bool adaptive_window = false;            // window = min(window, flow's stable dt)
-  double timeout = 5.0;                    // seconds of silence before a participant is hung
-  double resend_interval = 0.05;           // seconds between retransmissions
-  int chunk_values = 4096;                 // float64 values per message chunk
+  double window = 1e-3;           // fixed window length [s]
+  bool adaptive_window = false;   // window = min(window, flow's stable dt)
+  double timeout = 5.0;           // seconds of silence before a participant is hung
+  double resend_interval = 0.05;  // seconds between retransmissions
+  int chunk_values = 4096;        // float64 values per message chunk
 };
 
 // The one world frame every participant works in (docs/architecture.md): right-handed, x along
