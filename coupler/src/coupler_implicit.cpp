@@ -238,6 +238,7 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
     const double drag_scale = previous_dt > 0.0 ? previous_dt / dt : 0.0;
     Eigen::VectorXd x = gather(index - 1, accepted[index - 1], drag_scale);
     int32_t iteration = 0;
+    Eigen::VectorXd scales;
     while (true) {
       run_iteration(index, iteration);
       const Eigen::VectorXd h = gather(index, iteration, 1.0);
@@ -258,7 +259,9 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
         if (settings.max_iterations > 1) spdlog::warn("{}; continuing", text);
         break;
       }
-      const Eigen::VectorXd scales = block_scales(blocks, h);
+      // One scale per window (from its first answer), so the accelerator's columns of one
+      // window are differences in the same units.
+      if (iteration == 0) scales = block_scales(blocks, h);
       const Eigen::VectorXd next =
           accelerator.next(x.cwiseQuotient(scales), h.cwiseQuotient(scales)).cwiseProduct(scales);
       if (!next.allFinite()) {
