@@ -127,6 +127,17 @@ void Writer::bytes(std::string_view name, const void* data, std::size_t element_
   ++records_;
 }
 
+std::string Writer::encode() const {
+  std::string data(kMagic, sizeof(kMagic));
+  append(data, kFormatVersion);
+  append(data, static_cast<std::uint32_t>(kind_.size()));
+  data.append(kind_);
+  append(data, records_);
+  data.append(body_);
+  append(data, crc32(data.data(), data.size()));
+  return data;
+}
+
 std::uint64_t Writer::save(const std::filesystem::path& path) const {
   std::string head(kMagic, sizeof(kMagic));
   append(head, kFormatVersion);
@@ -159,6 +170,17 @@ std::uint64_t Writer::save(const std::filesystem::path& path) const {
 
 Reader::Reader(const std::filesystem::path& path, std::string_view expected_kind)
     : file_(path), data_(read_file(path)) {
+  parse(expected_kind);
+}
+
+Reader::Reader(std::string bytes, const std::filesystem::path& label,
+               std::string_view expected_kind)
+    : file_(label), data_(std::move(bytes)) {
+  parse(expected_kind);
+}
+
+void Reader::parse(std::string_view expected_kind) {
+  const std::filesystem::path& path = file_;
   auto [kind, start] = check_envelope(path, data_, nullptr);
   kind_ = std::move(kind);
   if (!expected_kind.empty() && kind_ != expected_kind) {

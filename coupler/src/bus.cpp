@@ -100,7 +100,7 @@ cosim_msgs::header_t Bus::make_header(const Stamp& stamp, const std::string& sen
   header.sender = sender;
   header.sequence = next_sequence_[sender]++;
   header.window = stamp.window;
-  header.iteration = 0;
+  header.iteration = stamp.iteration;
   header.sim_time = stamp.sim_time;
   header.dt = stamp.dt;
   header.schema_hash = schema_hash_;
@@ -157,7 +157,7 @@ void Bus::publish_unsequenced(const std::string& channel, const Message& message
 void Bus::publish_window(const Stamp& stamp, int8_t command, int64_t total_windows,
                          const std::string& reason,
                          const std::vector<std::pair<double, double>>& windows,
-                         const std::vector<int64_t>& checkpoints) {
+                         const std::vector<int64_t>& checkpoints, int32_t accepted_iteration) {
   std::lock_guard lock(publish_mutex_);
   cosim_msgs::window_t message;
   message.header = make_header(stamp, options_.name);
@@ -171,6 +171,7 @@ void Bus::publish_window(const Stamp& stamp, int8_t command, int64_t total_windo
   }
   message.checkpoint_count = static_cast<int32_t>(checkpoints.size());
   message.checkpoint_windows = checkpoints;
+  message.accepted_iteration = accepted_iteration;
   publish_sequenced(kWindowChannel, message);
 }
 
@@ -180,8 +181,8 @@ void Bus::publish_status(const Stamp& stamp, cosim_msgs::status_t status) {
   status.field_count = static_cast<int32_t>(status.fields.size());
   for (const auto& field : status.fields) {
     if (field.chunk_count == 0) {
-      field_sequences_[FieldKey{status.header.sender, status.header.window, field.name}] = {
-          status.header.sequence};
+      field_sequences_[FieldKey{status.header.sender, status.header.window, field.name,
+                                status.header.iteration}] = {status.header.sequence};
     }
   }
   publish_sequenced(kStatusChannel, status);
@@ -215,7 +216,8 @@ int32_t Bus::publish_field(const Stamp& stamp, const std::string& field,
     chunk.value_count = static_cast<int32_t>(end - begin);
     chunk.values.assign(values.begin() + static_cast<std::ptrdiff_t>(begin),
                         values.begin() + static_cast<std::ptrdiff_t>(end));
-    field_sequences_[FieldKey{sender, stamp.window, field}].push_back(chunk.header.sequence);
+    field_sequences_[FieldKey{sender, stamp.window, field, stamp.iteration}].push_back(
+        chunk.header.sequence);
     publish_sequenced(kFieldChannel, chunk);
   }
   const int64_t oldest_kept = stamp.window - options_.cached_windows;
@@ -328,6 +330,7 @@ void Bus::request_missing() {
     request.count = static_cast<int32_t>(due.size());
     request.sequences = std::move(due);
     request.field_window = 0;
+    request.field_iteration = 0;
     {
       std::lock_guard lock(publish_mutex_);
       publish_unsequenced(kResendChannel, request);
@@ -355,6 +358,7 @@ void Bus::request_field(const FieldKey& key) {
   request.count = 0;
   request.field = key.field;
   request.field_window = key.window;
+  request.field_iteration = key.iteration;
   std::lock_guard lock(publish_mutex_);
   publish_unsequenced(kResendChannel, request);
 }
@@ -509,7 +513,8 @@ void Bus::on_status(cosim_msgs::status_t status, bool fresh) {
                      status.header.sender, status.header.window);
         continue;
       }
-      const FieldKey key{status.header.sender, status.header.window, field.name};
+      const FieldKey key{status.header.sender, status.header.window, field.name,
+                         status.header.iteration};
       completed_.try_emplace(key, std::move(field.values));
     }
   }
@@ -521,7 +526,7 @@ void Bus::on_status(cosim_msgs::status_t status, bool fresh) {
 }
 
 void Bus::on_field(const cosim_msgs::field_chunk_t& chunk) {
-  const FieldKey key{chunk.header.sender, chunk.header.window, chunk.field};
+  const FieldKey key{chunk.header.sender, chunk.header.window, chunk.field, chunk.header.iteration};
   if (completed_.contains(key)) return;
   if (chunk.chunk_count <= 0 || chunk.chunk_index < 0 || chunk.chunk_index >= chunk.chunk_count ||
       chunk.offset < 0 || chunk.offset + chunk.value_count > chunk.total_values) {
@@ -559,8 +564,8 @@ void Bus::on_resend(const cosim_msgs::resend_request_t& request) {
   int64_t served = 0;
   std::vector<int64_t> sequences = request.sequences;
   if (!request.field.empty()) {
-    const auto found =
-        field_sequences_.find(FieldKey{request.target, request.field_window, request.field});
+    const auto found = field_sequences_.find(
+        FieldKey{request.target, request.field_window, request.field, request.field_iteration});
     if (found != field_sequences_.end()) {
       sequences.insert(sequences.end(), found->second.begin(), found->second.end());
     }

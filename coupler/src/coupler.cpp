@@ -41,8 +41,8 @@ Coupler::Coupler(const scenario::Scene& scene, CouplerOptions options)
   bus_options.chunk_values = scene_.coupling.chunk_values;
   bus_options.record_mode = options_.record_mode;
   bus_options.resend_interval = scene_.coupling.resend_interval;
-  // The coupler records fields but never uses them.
-  bus_options.keep_fields = false;
+  // The coupler records fields but never uses them, except to iterate an implicit scheme's window.
+  bus_options.keep_fields = scene_.coupling.is_implicit();
   bus_ = std::make_unique<Bus>(bus_options);
   for (const auto& entry : scene_.participants) {
     names_.push_back(entry.acts_as);
@@ -79,7 +79,11 @@ void Coupler::collect(ProcessGroup& processes, const Collection& collection) {
     const double interval =
         collection.patient && seconds_since(start) >= 2.0 ? std::max(resend, 0.5) : resend;
     if (seconds_since(last_broadcast) >= interval) {
-      bus_->publish_window(collection.stamp, collection.command, scene_.total_windows());
+      if (collection.broadcast) {
+        collection.broadcast();
+      } else {
+        bus_->publish_window(collection.stamp, collection.command, scene_.total_windows());
+      }
       last_broadcast = Clock::now();
     }
     bus_->poll(resend);
@@ -92,9 +96,14 @@ void Coupler::collect(ProcessGroup& processes, const Collection& collection) {
         throw Failure(
             fmt::format("'{}' failed {}: {}", sender, collection.failed_during, status.message));
       }
+      if (status.state == status_t::STATE_CHECKPOINTED) {
+        book_.answer(status);
+        continue;
+      }
       if (status.state != collection.answer) continue;
       if (collection.answer == status_t::STATE_DONE &&
-          status.header.window != collection.stamp.window) {
+          (status.header.window != collection.stamp.window ||
+           status.header.iteration != collection.stamp.iteration)) {
         continue;
       }
       if (std::find(pending.begin(), pending.end(), sender) == pending.end()) continue;
@@ -425,7 +434,8 @@ RunResult Coupler::run(ProcessGroup& processes) {
   int64_t index = 0;
   try {
     handshake(processes);
-    time = run_windows(processes, result);
+    time = scene_.coupling.is_implicit() ? run_implicit_windows(processes, result)
+                                         : run_windows(processes, result);
     index = result.windows_completed + 1;
     finish(processes, result.windows_completed + 1, time);
     result.ok = true;

@@ -10,7 +10,8 @@ namespace cosim::coupler {
 SolidLink::SolidLink(Participant& participant, const scenario::Scene& scene,
                      std::size_t point_count)
     : participant_(participant),
-      serial_(scene.coupling.scheme == "serial-explicit"),
+      serial_(scene.coupling.is_serial()),
+      implicit_(scene.coupling.is_implicit()),
       point_count_(point_count) {
   if (const auto* flow = scene.flow()) flow_name_ = flow->acts_as;
 }
@@ -32,30 +33,32 @@ void SolidLink::publish_state(std::span<const Eigen::Vector3d> positions,
   }
 }
 
-AmbientFlow SolidLink::receive(int64_t flow_window) {
-  if (const auto cached = cache_.find(flow_window); cached != cache_.end()) return cached->second;
+AmbientFlow SolidLink::receive(const std::string& sender, int64_t flow_window, int32_t iteration) {
+  const auto key = std::tuple(sender, flow_window, iteration);
+  if (const auto cached = cache_.find(key); cached != cache_.end()) return cached->second;
   AmbientFlow flow;
   const std::string me = participant_.name();
   const std::string velocity_field = exchange::ambient_velocity_field(me);
   const std::string water_field = exchange::water_fraction_field(me);
   flow.velocity = exchange::unpack(
-      participant_.receive(flow_name_, velocity_field, flow_window), point_count_,
-      fmt::format("field '{}' from '{}' (window {})", velocity_field, flow_name_, flow_window));
-  flow.water_fraction = participant_.receive(flow_name_, water_field, flow_window);
+      participant_.receive(sender, velocity_field, flow_window, iteration), point_count_,
+      fmt::format("field '{}' from '{}' (window {})", velocity_field, sender, flow_window));
+  flow.water_fraction = participant_.receive(sender, water_field, flow_window, iteration);
   if (flow.water_fraction.size() != point_count_) {
     throw CouplingError(fmt::format("field '{}' from '{}' (window {}): expected {} values, got {}",
-                                    water_field, flow_name_, flow_window, point_count_,
+                                    water_field, sender, flow_window, point_count_,
                                     flow.water_fraction.size()));
   }
   flow.surface_elevation =
-      participant_.receive(flow_name_, exchange::surface_field(me), flow_window);
+      participant_.receive(sender, exchange::surface_field(me), flow_window, iteration);
   if (flow.surface_elevation.size() != point_count_) {
     throw CouplingError(fmt::format("field '{}' from '{}' (window {}): expected {} values, got {}",
-                                    exchange::surface_field(me), flow_name_, flow_window,
-                                    point_count_, flow.surface_elevation.size()));
+                                    exchange::surface_field(me), sender, flow_window, point_count_,
+                                    flow.surface_elevation.size()));
   }
-  std::erase_if(cache_, [&](const auto& item) { return item.first < flow_window - 1; });
-  cache_[flow_window] = flow;
+  std::erase_if(cache_,
+                [&](const auto& item) { return std::get<1>(item.first) < flow_window - 1; });
+  cache_[key] = flow;
   return flow;
 }
 
@@ -67,39 +70,52 @@ std::pair<AmbientFlow, AmbientFlow> SolidLink::ambient(const Window& window) {
     return {still, still};
   }
   const auto windows = exchange::flow_windows_for_solid(window.index, serial_);
-  AmbientFlow begin = receive(windows.begin);
-  AmbientFlow end = windows.end == windows.begin ? begin : receive(windows.end);
+  if (implicit_) {
+    AmbientFlow begin = receive(flow_name_, windows.begin, window.accepted_iteration);
+    if (serial_) return {begin, receive(flow_name_, window.index, window.iteration)};
+    if (window.iteration == 0) return {begin, begin};
+    return {begin, receive(exchange::kCoupler, window.index, window.iteration)};
+  }
+  AmbientFlow begin = receive(flow_name_, windows.begin);
+  AmbientFlow end = windows.end == windows.begin ? begin : receive(flow_name_, windows.end);
   return {std::move(begin), std::move(end)};
 }
 
 FlowLink::FlowLink(Participant& participant, const scenario::Scene& scene, SolverFrame frame)
-    : participant_(participant), frame_(frame) {
+    : participant_(participant), frame_(frame), implicit_(scene.coupling.is_implicit()) {
   for (const auto* solid : scene.solids()) solids_.push_back(solid->acts_as);
 }
 
 std::vector<SolidForcing> FlowLink::receive_solids(const Window& window, bool with_volumes) {
-  const int64_t solid_window = exchange::solid_window_for_flow(window.index);
+  // Implicit iterations after the first take the coupler's relaxed fields of this window itself.
+  const bool relaxed = implicit_ && window.iteration > 0;
+  const int64_t solid_window =
+      relaxed ? window.index : exchange::solid_window_for_flow(window.index);
+  const int32_t iteration = relaxed ? window.iteration : implicit_ ? window.accepted_iteration : 0;
   // The drag of window k-1 acted on the solids for dt_{k-1}; spread over dt_k it gives the flow
-  // the same impulse (adaptive windows change length).
-  const double impulse_scale = window.dt > 0.0 ? previous_dt_ / window.dt : 0.0;
+  // the same impulse (adaptive windows change length). The relaxed drag is of window k already.
+  const double impulse_scale = relaxed ? 1.0 : window.dt > 0.0 ? previous_dt_ / window.dt : 0.0;
   if (window.dt > 0.0) previous_dt_ = window.dt;
   std::vector<SolidForcing> states;
   for (const auto& name : solids_) {
-    auto what = [&](const char* field) {
-      return fmt::format("field '{}' from '{}' (window {})", field, name, solid_window);
+    const std::string sender = relaxed ? exchange::kCoupler : name;
+    auto field = [&](const char* what) {
+      return relaxed ? exchange::solid_field_for_flow(what, name) : std::string(what);
     };
-    const auto positions = exchange::unpack(
-        participant_.receive(name, exchange::kPositions, solid_window), what(exchange::kPositions));
+    auto what = [&](const char* field_name) {
+      return fmt::format("field '{}' from '{}' (window {})", field(field_name), sender,
+                         solid_window);
+    };
+    auto get = [&](const char* field_name) {
+      return participant_.receive(sender, field(field_name), solid_window, iteration);
+    };
+    const auto positions = exchange::unpack(get(exchange::kPositions), what(exchange::kPositions));
     const std::size_t count = positions.size();
     const auto velocities =
-        exchange::unpack(participant_.receive(name, exchange::kVelocities, solid_window), count,
-                         what(exchange::kVelocities));
-    const auto drag = exchange::unpack(participant_.receive(name, exchange::kDrag, solid_window),
-                                       count, what(exchange::kDrag));
+        exchange::unpack(get(exchange::kVelocities), count, what(exchange::kVelocities));
+    const auto drag = exchange::unpack(get(exchange::kDrag), count, what(exchange::kDrag));
     std::vector<double> volumes(count, 0.0);
-    if (with_volumes && exchange::displaces_water(name)) {
-      volumes = participant_.receive(name, exchange::kVolumes, solid_window);
-    }
+    if (with_volumes && exchange::displaces_water(name)) volumes = get(exchange::kVolumes);
     if (volumes.size() != count) {
       throw CouplingError(fmt::format("{}: expected {} values, got {}", what(exchange::kVolumes),
                                       count, volumes.size()));

@@ -65,7 +65,7 @@ double Participant::compute_seconds() const {
 }
 
 Stamp Participant::stamp() const {
-  return Stamp{current_.index, current_.time, current_.dt};
+  return Stamp{current_.index, current_.time, current_.dt, current_.iteration};
 }
 
 void Participant::publish_state(int8_t state, int steps, double stable_dt,
@@ -189,9 +189,16 @@ Window Participant::next_window() {
           take_checkpoint_requests(message);
           // A grant of one or more windows; older grants repeat what newer ones say.
           const auto granted = static_cast<std::size_t>(std::max(0, message.window_count));
+          // Implicit schemes grant one iteration of one window at a time.
+          const int32_t iteration = message.header.iteration;
           auto grant = [&](int64_t window, double time, double dt) {
-            if (window <= current_.index) return;
-            granted_.try_emplace(window, Window{window, time, dt, message.total_windows, false});
+            if (std::pair(window, iteration) <= std::pair(current_.index, current_.iteration)) {
+              return;
+            }
+            Window granted_window{window, time, dt, message.total_windows, false};
+            granted_window.iteration = iteration;
+            granted_window.accepted_iteration = message.accepted_iteration;
+            granted_.try_emplace({window, iteration}, granted_window);
           };
           if (granted == 0) grant(index, message.header.sim_time, message.header.dt);
           for (std::size_t i = 0;
@@ -214,13 +221,18 @@ Window Participant::next_window() {
       return checkpoint;
     }
     std::optional<Window> next;
-    if (const auto found = granted_.find(current_.index + 1); found != granted_.end()) {
+    if (const auto again = granted_.find({current_.index, current_.iteration + 1});
+        again != granted_.end()) {
+      next = again->second;
+    } else if (const auto found = granted_.find({current_.index + 1, 0}); found != granted_.end()) {
       next = found->second;
     } else if (finish_ && finish_->index == current_.index + 1) {
       next = finish_;
     }
     if (next) {
-      std::erase_if(granted_, [&](const auto& item) { return item.first <= next->index; });
+      std::erase_if(granted_, [&](const auto& item) {
+        return item.first <= std::pair(next->index, next->iteration);
+      });
       current_ = *next;
       current_done_ = false;
       window_fields_.clear();
@@ -268,9 +280,9 @@ void Participant::flush_inline_fields() {
 }
 
 std::vector<double> Participant::receive(const std::string& sender, const std::string& field,
-                                         int64_t window) {
+                                         int64_t window, int32_t iteration) {
   const ApiTimer timer(*this);
-  const FieldKey key{sender, window, field};
+  const FieldKey key{sender, window, field, iteration};
   const bool holding = std::any_of(pending_fields_.begin(), pending_fields_.end(),
                                    [](const auto& entry) { return entry.chunk_count == 0; });
   if (holding && !bus_->has_field(key)) flush_inline_fields();

@@ -114,8 +114,19 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
     clock.written(solver.output_time());
   };
   WindowResult last;
+  // Implicit schemes run a window several times: each iteration starts from the state at the
+  // window start, kept in memory in the checkpoint format (the solver's save_checkpoint), and an
+  // output frame is written only once the coupler has accepted the window (when the next window,
+  // a checkpoint or the finish comes).
+  const bool implicit = context.scene.coupling.is_implicit();
+  std::string window_start;
+  bool output_pending = false;
   while (true) {
     const Window window = participant.next_window();
+    if (output_pending && (window.checkpoint || window.finish || window.iteration == 0)) {
+      write_if_due();
+      output_pending = false;
+    }
     if (window.checkpoint) {
       write_checkpoint(context, solver, clock, window, last);
       continue;
@@ -134,6 +145,18 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
       for (const auto& [name, values] : restored->fields) participant.publish(name, values);
       last = {0, restored->stable_dt};
       restored->fields.clear();
+    } else if (implicit && window.index >= 1) {
+      if (window.iteration == 0) {
+        checkpoint::Writer start(context.program);
+        solver.save_checkpoint(start);
+        window_start = start.encode();
+      } else {
+        solver.load_checkpoint(checkpoint::Reader(
+            window_start, fmt::format("the start of window {} (in memory)", window.index),
+            context.program));
+      }
+      last = solver.advance(window);
+      output_pending = true;
     } else {
       last = window.index == 0 ? solver.initial_window(window) : solver.advance(window);
       write_if_due();

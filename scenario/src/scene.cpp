@@ -88,8 +88,16 @@ WorldSettings parse_world(Section world) {
 
 CouplingSettings parse_coupling(Section coupling) {
   CouplingSettings settings;
-  settings.scheme =
-      coupling.text("scheme", settings.scheme, {"serial-explicit", "parallel-explicit"});
+  settings.scheme = coupling.text(
+      "scheme", settings.scheme,
+      {"serial-explicit", "parallel-explicit", "serial-implicit", "parallel-implicit"});
+  if (settings.is_implicit() || coupling.has("implicit")) {
+    if (!settings.is_implicit()) {
+      coupling.fail("implicit", "is read only with scheme serial-implicit or parallel-implicit");
+    }
+    Section implicit = coupling.optional_child("implicit");
+    read_parameters(implicit, settings.implicit);
+  }
   settings.window = coupling.number("window", Range::positive());
   settings.adaptive_window = coupling.flag("adaptive_window", settings.adaptive_window);
   // Solids hold the flow's fields over a window (and the flow the solids'); the key used to

@@ -176,8 +176,13 @@ const std::vector<Participant>& participants() {
        "`duration`, `output_interval`, `coupling` and `world` are read in "
        "`scenario/src/scene.cpp`.",
        [] {
-         return std::vector<Group>{group<scenario::RunSettings>(
-             "RunSettings", "scenario/include/cosim/scenario/scene.hpp", "")};
+         return std::vector<Group>{
+             group<scenario::RunSettings>("RunSettings",
+                                          "scenario/include/cosim/scenario/scene.hpp", ""),
+             group<scenario::ImplicitSettings>(
+                 "ImplicitSettings (read with coupling.scheme serial-implicit or "
+                 "parallel-implicit)",
+                 "scenario/include/cosim/scenario/scene.hpp", "coupling.implicit.")};
        }},
   };
   return list;

@@ -207,8 +207,9 @@ int report_replay(const ReplayRequest& request, const scenario::ParticipantEntry
 int replay_run(const ReplayRequest& request) {
   const auto recorded_scenario = request.recorded_run / "scenario.yaml";
   // Runs recorded before compression have a plain events.lcmlog.
-  const auto recorded_log = std::filesystem::absolute(
-      coupler::find_event_log(request.recorded_run).value_or(request.recorded_run / "events.lcmlog.zst"));
+  const auto recorded_log =
+      std::filesystem::absolute(coupler::find_event_log(request.recorded_run)
+                                    .value_or(request.recorded_run / "events.lcmlog.zst"));
   YAML::Node document = scenario::load_yaml_file(recorded_scenario);
   const scenario::Scene recorded = scenario::load_resolved_scene(recorded_scenario);
 
@@ -222,6 +223,13 @@ int replay_run(const ReplayRequest& request) {
   }
   const RecordedEnd end = recorded_end(request.recorded_run);
   check_recording(request, recorded_log, end);
+  if (recorded.coupling.is_implicit()) {
+    // Its log holds every coupling iteration of a window; a replay plays one answer per window.
+    throw std::runtime_error(fmt::format(
+        "{}: the run used coupling.scheme {}; replay plays one answer per window and cannot "
+        "follow coupling iterations (replay a serial-explicit or parallel-explicit run)",
+        recorded_scenario.string(), recorded.coupling.scheme));
+  }
   if (driven->executable == "replay") {
     throw std::runtime_error(
         fmt::format("'{}' was itself a replay in that run", request.participant));

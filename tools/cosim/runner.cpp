@@ -249,6 +249,20 @@ nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& reques
                                  {"build", restart->manifest.value("build", "")}};
   }
   summary["checkpoints"] = result.checkpoints;
+  if (scene.coupling.is_implicit()) {
+    // Coupling iterations of windows 1..N (each a full run of every participant's window).
+    const auto& its = result.iterations;
+    int64_t total = 0;
+    for (const int n : its) total += n;
+    summary["implicit"] = {
+        {"acceleration", result.acceleration},
+        {"max_iterations", scene.coupling.implicit.max_iterations},
+        {"iterations_total", total},
+        {"iterations_mean", its.empty() ? 0.0 : static_cast<double>(total) / its.size()},
+        {"iterations_max", its.empty() ? 0 : *std::max_element(its.begin(), its.end())},
+        {"windows_at_max_iterations", result.windows_at_max_iterations},
+        {"iterations_per_window", its}};
+  }
   summary["injected_loss"] = request.loss_probability;
   summary["remote_participants"] = request.remote;
   // `cosim replay` reads this to tell a log without field values from a damaged one.

@@ -57,7 +57,8 @@ struct PlantFieldCheckpoint {
       }
     });
     const auto pairs = in.vector<int>("plants.plant_contact_pairs");
-    f.plant_contact_pairs_.assign(f.plants_.size(), {});
+    // No record entries: saved before the first contact search (an implicit window's start).
+    f.plant_contact_pairs_.assign(pairs.empty() ? 0 : f.plants_.size(), {});
     std::size_t at = 0;
     for (auto& plant : f.plant_contact_pairs_) {
       if (at >= pairs.size() || pairs[at] < 0 ||

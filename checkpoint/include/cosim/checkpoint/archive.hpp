@@ -51,6 +51,9 @@ class Writer {
   // Writes the file (temporary name, then rename); returns its size in bytes. Throws Error
   // naming the file when it cannot be written (disk full).
   std::uint64_t save(const std::filesystem::path& path) const;
+  // The bytes save() would write, kept in memory (implicit coupling rolls every participant back
+  // to its window-start state between iterations without touching the disk).
+  std::string encode() const;
 
  private:
   std::string kind_;
@@ -63,6 +66,8 @@ class Reader {
   // Reads and checks the whole file: magic, format version, checksum, and the kind when
   // `expected_kind` is not empty.
   explicit Reader(const std::filesystem::path& path, std::string_view expected_kind = {});
+  // The same checks on bytes from Writer::encode(); `label` names them in messages.
+  Reader(std::string bytes, const std::filesystem::path& label, std::string_view expected_kind);
 
   const std::filesystem::path& file() const { return file_; }
   const std::string& kind() const { return kind_; }
@@ -99,6 +104,7 @@ class Reader {
     std::uint64_t count = 0;
     std::size_t offset = 0;
   };
+  void parse(std::string_view expected_kind);
   const Record& find(std::string_view name) const;
   std::size_t count(std::string_view name, std::size_t element_size) const;
   void copy(std::string_view name, char* out, std::size_t element_size, std::size_t count,

@@ -77,12 +77,14 @@ struct Stamp {
   int64_t window = 0;
   double sim_time = 0.0;
   double dt = 0.0;
+  int32_t iteration = 0;  // coupling iteration inside the window (implicit schemes)
 };
 
 struct FieldKey {
   std::string sender;
   int64_t window;
   std::string field;
+  int32_t iteration = 0;  // implicit schemes publish a window's fields once per iteration
   auto operator<=>(const FieldKey&) const = default;
 };
 
@@ -102,7 +104,7 @@ class Bus {
   void publish_window(const Stamp& stamp, int8_t command, int64_t total_windows,
                       const std::string& reason = "",
                       const std::vector<std::pair<double, double>>& windows = {},
-                      const std::vector<int64_t>& checkpoints = {});
+                      const std::vector<int64_t>& checkpoints = {}, int32_t accepted_iteration = 0);
   // Fields inside the status (field_t with chunk_count 0) are delivered with it.
   void publish_status(const Stamp& stamp, cosim_msgs::status_t status);
   // Splits values into chunks and publishes them now. `as_sender` lets a replay driver publish

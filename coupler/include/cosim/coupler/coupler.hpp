@@ -61,6 +61,11 @@ struct RunResult {
   std::vector<ParticipantReport> participants;
   Bus::Counters traffic;
   nlohmann::json checkpoints = nlohmann::json::array();  // CheckpointBook::written()
+  // Implicit schemes: coupling iterations of every window 1..N (empty for explicit schemes),
+  // and the windows that reached coupling.implicit.max_iterations without converging.
+  std::vector<int> iterations;
+  int64_t windows_at_max_iterations = 0;
+  std::string acceleration;
 };
 
 class Coupler {
@@ -84,12 +89,17 @@ class Coupler {
     bool patient = false;       // rebroadcast slowly after a while (long initialisations)
     std::function<void(const cosim_msgs::status_t&)> accept;
     std::function<void(const std::vector<std::string>& pending, double waited)> check;
+    // Replaces the plain broadcast of `command` (an implicit iteration's grant).
+    std::function<void()> broadcast;
   };
   void collect(ProcessGroup& processes, const Collection& collection);
   void handshake(ProcessGroup& processes);
   // Windows 0..N: grants windows ahead (fixed windows) so participants never wait for the
   // coupler, collects every DONE, and returns the simulated time reached.
   double run_windows(ProcessGroup& processes, RunResult& result);
+  // The same for the implicit schemes: one iteration of one window granted at a time, each
+  // window iterated until the exchanged fields converge (coupler/src/coupler_implicit.cpp).
+  double run_implicit_windows(ProcessGroup& processes, RunResult& result);
   std::string window_text(int64_t index) const;
   void finish(ProcessGroup& processes, int64_t index, double time);
   void check_processes(ProcessGroup& processes, const std::string& during);

@@ -8,6 +8,7 @@
 #include <map>
 #include <span>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "cosim/checkpoint/archive.hpp"
@@ -40,13 +41,15 @@ class SolidLink {
   std::pair<AmbientFlow, AmbientFlow> ambient(const Window& window);
 
  private:
-  AmbientFlow receive(int64_t flow_window);
+  // `sender`'s samples of (flow_window, iteration): the flow's, or the coupler's relaxed ones.
+  AmbientFlow receive(const std::string& sender, int64_t flow_window, int32_t iteration = 0);
 
   Participant& participant_;
   std::string flow_name_;  // empty: no flow provider
   bool serial_ = true;
+  bool implicit_ = false;
   std::size_t point_count_;
-  std::map<int64_t, AmbientFlow> cache_;
+  std::map<std::tuple<std::string, int64_t, int32_t>, AmbientFlow> cache_;
 };
 
 // One solid as the flow sees it in a window, in the flow's own coordinates (SolverFrame): where
@@ -101,6 +104,7 @@ class FlowLink {
   Participant& participant_;
   std::vector<std::string> solids_;
   SolverFrame frame_;
+  bool implicit_ = false;
   double previous_dt_ = 0.0;  // window 1 takes the solids' window-0 drag, which is zero
   Eigen::Vector3d booked_impulse_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d out_of_plane_impulse_ = Eigen::Vector3d::Zero();

@@ -44,6 +44,10 @@ struct Window {
   bool finish = false;  // the coupler asks for final outputs and metrics
   // Not a window to run: write a checkpoint of the state after window `index` (just done).
   bool checkpoint = false;
+  // Implicit schemes: the coupling iteration of this window (each starts from the window-start
+  // state), and the iteration the coupler accepted for window index - 1. 0 for explicit schemes.
+  int32_t iteration = 0;
+  int32_t accepted_iteration = 0;
   double end_time() const { return time + dt; }
 };
 
@@ -82,7 +86,8 @@ class Participant {
   void publish(const std::string& field, std::span<const double> values);
   // Waits for `sender`'s field of `window`, asking for lost chunks again. Throws CouplingError
   // when the sender stays silent longer than the timeout, or the coupler aborts.
-  std::vector<double> receive(const std::string& sender, const std::string& field, int64_t window);
+  std::vector<double> receive(const std::string& sender, const std::string& field, int64_t window,
+                              int32_t iteration = 0);
   // Marks the current window done. `steps`: solver steps taken (sub-steps for solids);
   // stable_dt: the largest next window this participant accepts (0 for no limit).
   void done(int steps, double stable_dt = 0.0);
@@ -132,7 +137,7 @@ class Participant {
   double api_seconds_ = 0.0;
   int64_t total_steps_ = 0;
   // Windows the coupler has granted and not yet run; the FINISH once it came.
-  std::map<int64_t, Window> granted_;
+  std::map<std::pair<int64_t, int32_t>, Window> granted_;  // by (window, iteration)
   std::optional<Window> finish_;
   // This window's fields, for its DONE report.
   std::vector<cosim_msgs::field_t> pending_fields_;

@@ -17,13 +17,87 @@ namespace cosim::scenario {
 
 enum class Role { flow, solid };
 
+// Implicit coupling (coupling.scheme serial-implicit or parallel-implicit): each window is
+// iterated, every participant rolled back to its window start, until the fields the solids hand
+// the flow (and in the parallel scheme the flow's velocity samples) no longer change. Keys under
+// `coupling.implicit`.
+enum class Acceleration { none, constant, aitken, iqn_ils };
+inline constexpr Choices<Acceleration, 4> kAccelerations{{{"none", Acceleration::none},
+                                                          {"constant", Acceleration::constant},
+                                                          {"aitken", Acceleration::aitken},
+                                                          {"iqn-ils", Acceleration::iqn_ils}}};
+enum class AtMaxIterations { continue_run, stop };
+inline constexpr Choices<AtMaxIterations, 2> kAtMaxIterations{
+    {{"continue", AtMaxIterations::continue_run}, {"stop", AtMaxIterations::stop}}};
+
+struct ImplicitSettings {
+  int max_iterations = 30;
+  double relative_tolerance = 1e-4;
+  double absolute_force = 1e-9;     // [N]
+  double absolute_position = 1e-9;  // [m]
+  double absolute_velocity = 1e-8;  // [m/s]
+  AtMaxIterations at_max_iterations = AtMaxIterations::continue_run;
+  Acceleration acceleration = Acceleration::iqn_ils;
+  double relaxation = 0.5;
+  int reuse_windows = 0;
+  double filter = 1e-10;
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ImplicitSettings>
+void visit_parameters(P& p, V& v) {
+  v(Key("max_iterations")
+        .in(Range::between(1, 1000))
+        .doc("most coupling iterations of one window (1: the explicit scheme's result)"),
+    p.max_iterations);
+  v(Key("relative_tolerance")
+        .in(Range::non_negative())
+        .doc("converged when |H(x) - x| <= this * |H(x)| for each exchanged field (2-norm)"),
+    p.relative_tolerance);
+  v(Key("absolute_force")
+        .unit("N")
+        .in(Range::non_negative())
+        .doc("or when the root-mean-square change of a force field is below this"),
+    p.absolute_force);
+  v(Key("absolute_position").unit("m").in(Range::non_negative()).doc("the same for positions"),
+    p.absolute_position);
+  v(Key("absolute_velocity").unit("m/s").in(Range::non_negative()).doc("the same for velocities"),
+    p.absolute_velocity);
+  v(Key("at_max_iterations")
+        .doc("a window not converged in max_iterations: continue (a warning, counted in "
+             "summary.json) or stop the run naming the window"),
+    p.at_max_iterations, kAtMaxIterations);
+  v(Key("acceleration")
+        .doc("next input from the iterates: none (plain iteration), constant under-relaxation, "
+             "aitken, iqn-ils (quasi-Newton inverse least squares)"),
+    p.acceleration, kAccelerations);
+  v(Key("relaxation")
+        .in(Range{0.0, 1.0, true})
+        .doc("constant: the factor; aitken: the first factor of a window; iqn-ils: the first "
+             "step of a window without columns"),
+    p.relaxation);
+  v(Key("reuse_windows")
+        .in(Range::between(0, 100))
+        .doc("iqn-ils: windows whose columns are kept for the next windows"),
+    p.reuse_windows);
+  v(Key("filter")
+        .in(Range::between(0.0, 1.0))
+        .doc("iqn-ils: drop a column whose part orthogonal to newer ones is below this times its "
+             "length (QR2 filter)"),
+    p.filter);
+}
+
 struct CouplingSettings {
-  std::string scheme = "serial-explicit";  // or "parallel-explicit"
-  double window = 1e-3;                    // fixed window length [s]
-  bool adaptive_window = false;            // window = min(window, flow's stable dt)
-  double timeout = 5.0;                    // seconds of silence before a participant is hung
-  double resend_interval = 0.05;           // seconds between retransmissions
-  int chunk_values = 4096;                 // float64 values per message chunk
+  // serial-explicit, parallel-explicit, serial-implicit, parallel-implicit
+  std::string scheme = "serial-explicit";
+  ImplicitSettings implicit;
+  bool is_implicit() const { return scheme.ends_with("-implicit"); }
+  bool is_serial() const { return scheme.starts_with("serial-"); }
+  double window = 1e-3;           // fixed window length [s]
+  bool adaptive_window = false;   // window = min(window, flow's stable dt)
+  double timeout = 5.0;           // seconds of silence before a participant is hung
+  double resend_interval = 0.05;  // seconds between retransmissions
+  int chunk_values = 4096;        // float64 values per message chunk
 };
 
 // The one world frame every participant works in (docs/architecture.md): right-handed, x along

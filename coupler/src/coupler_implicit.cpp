@@ -1,0 +1,300 @@
+// The coupler's window loop of the implicit schemes (serial-implicit, parallel-implicit).
+//
+// Window k is a fixed-point problem x = H(x) in the fields the solids hand the flow (positions,
+// velocities, drag of every solid; in the parallel scheme also the flow's velocity samples at
+// every solid). Iteration 0 is the explicit scheme's window (its inputs are window k-1's
+// accepted fields); after iteration i the coupler measures H(x_i) - x_i, and unless it has
+// converged it computes x_{i+1} with the accelerator, publishes it as its own fields of
+// (k, i + 1) and grants that iteration; every participant rolls back to its state at the start
+// of window k first (run_solver_loop). The coupler only post-processes exchanged fields here
+// (an exchange rule); the physics stays in the participants.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "cosim/coupler/acceleration.hpp"
+#include "cosim/coupler/coupler.hpp"
+#include "cosim/coupler/exchange.hpp"
+#include "cosim/coupler/implicit.hpp"
+
+namespace cosim::coupler {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+using cosim_msgs::status_t;
+using cosim_msgs::window_t;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+AccelerationOptions acceleration_options(const scenario::ImplicitSettings& settings) {
+  AccelerationOptions options;
+  switch (settings.acceleration) {
+    case scenario::Acceleration::none:
+      options.kind = AccelerationKind::none;
+      break;
+    case scenario::Acceleration::constant:
+      options.kind = AccelerationKind::constant;
+      break;
+    case scenario::Acceleration::aitken:
+      options.kind = AccelerationKind::aitken;
+      break;
+    case scenario::Acceleration::iqn_ils:
+      options.kind = AccelerationKind::iqn_ils;
+      break;
+  }
+  options.relaxation = settings.relaxation;
+  options.reuse_windows = settings.reuse_windows;
+  options.filter = settings.filter;
+  return options;
+}
+}  // namespace
+
+double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result) {
+  const auto& settings = scene_.coupling.implicit;
+  const bool serial = scene_.coupling.is_serial();
+  const bool adaptive = scene_.coupling.adaptive_window;
+  const double resend = scene_.coupling.resend_interval;
+  Accelerator accelerator(acceleration_options(settings));
+  result.acceleration = acceleration_name(accelerator.options().kind);
+
+  const auto* flow = scene_.flow();
+  std::vector<std::string> solids;
+  for (const auto* solid : scene_.solids()) solids.push_back(solid->acts_as);
+
+  const int64_t first = options_.restart ? options_.restart->window : 0;
+  plan_.assign(static_cast<std::size_t>(first) + 1, {0.0, 0.0});
+  double next_time = 0.0;
+  if (options_.restart) {
+    plan_[first] = {options_.restart->time, 0.0};
+    next_time = options_.restart->time;
+  }
+  std::map<int64_t, double> stable_dt;  // smallest stable dt of each window's accepted iteration
+  std::map<int64_t, int32_t> accepted{{first - 1, 0}};
+  Clock::time_point window_one_started{};
+
+  auto accept = [&](const status_t& status) {
+    auto& report = reports_[status.header.sender];
+    report.windows += status.header.iteration == 0 ? 1 : 0;
+    report.steps += status.steps;
+    report.compute_seconds = status.compute_seconds;
+    report.cpu_seconds = status.cpu_seconds;
+    report.wait_seconds = status.wait_seconds;
+    if (status.header.window == 0) {
+      report.physics_at_window_zero = status.physics_seconds;
+    } else if (report.physics_at_window_zero >= 0.0) {
+      report.physics_seconds = status.physics_seconds - report.physics_at_window_zero;
+    }
+    if (status.stable_dt > 0.0) {
+      auto [it, inserted] = stable_dt.try_emplace(status.header.window, status.stable_dt);
+      if (!inserted) it->second = std::min(it->second, status.stable_dt);
+    }
+  };
+
+  // One iteration of one window, granted until every participant's DONE is in.
+  auto run_iteration = [&](int64_t index, int32_t iteration) {
+    const auto [time, dt] = plan_[index];
+    stable_dt.erase(index);
+    Collection collection;
+    collection.stamp = Stamp{index, time, dt, iteration};
+    collection.command = window_t::COMMAND_ADVANCE;
+    collection.answer = status_t::STATE_DONE;
+    collection.during = window_text(index) + fmt::format(", iteration {}", iteration);
+    collection.failed_during = "in " + collection.during;
+    collection.accept = accept;
+    const int32_t previous = accepted.contains(index - 1) ? accepted[index - 1] : 0;
+    collection.broadcast = [&, index, iteration, previous, time = time, dt = dt] {
+      bus_->publish_window(Stamp{index, time, dt, iteration}, window_t::COMMAND_ADVANCE,
+                           result.total_windows, "", {{time, dt}}, book_.pending(index - 1),
+                           previous);
+    };
+    collect(processes, collection);
+  };
+
+  // A field of (index, iteration) heard from `sender`, asking again until it comes.
+  auto field = [&](const std::string& sender, const std::string& name, int64_t index,
+                   int32_t iteration) {
+    const FieldKey key{sender, index, name, iteration};
+    const auto start = Clock::now();
+    auto last_request = start;
+    while (true) {
+      if (auto values = bus_->field_values(key)) return std::move(*values);
+      if (seconds_since(start) > scene_.coupling.timeout) {
+        throw Failure(
+            fmt::format("'{}' did not deliver its field '{}' of {}, iteration {}, "
+                        "within {:.1f} s",
+                        sender, name, window_text(index), iteration, scene_.coupling.timeout));
+      }
+      if (seconds_since(last_request) >= resend) {
+        bus_->request_field(key);
+        last_request = Clock::now();
+      }
+      bus_->poll(resend);
+    }
+  };
+
+  // The iterated fields, in a fixed order: per solid its positions [m], velocities [m/s] and
+  // drag [N]; in the parallel scheme the flow's velocity samples at it [m/s].
+  std::vector<FieldBlock> blocks;
+  for (const auto& solid : solids) {
+    for (const char* name : {exchange::kPositions, exchange::kVelocities, exchange::kDrag}) {
+      FieldBlock block;
+      block.sender = solid;
+      block.field = name;
+      block.input = exchange::solid_field_for_flow(name, solid);
+      block.absolute = name == std::string(exchange::kPositions)    ? settings.absolute_position
+                       : name == std::string(exchange::kVelocities) ? settings.absolute_velocity
+                                                                    : settings.absolute_force;
+      blocks.push_back(block);
+    }
+    if (flow && !serial) {
+      FieldBlock block;
+      block.sender = flow->acts_as;
+      block.field = exchange::ambient_velocity_field(solid);
+      block.input = block.field;
+      block.absolute = settings.absolute_velocity;
+      blocks.push_back(block);
+    }
+  }
+  // The fields of (index, iteration) as one vector; `drag_scale` multiplies the drag blocks
+  // (iteration 0 takes window k-1's drag as the flow does: rescaled by dt_{k-1} / dt_k).
+  auto gather = [&](int64_t index, int32_t iteration, double drag_scale) {
+    std::vector<std::vector<double>> parts;
+    Eigen::Index total = 0;
+    for (auto& block : blocks) {
+      parts.push_back(field(block.sender, block.field, index, iteration));
+      block.offset = total;
+      block.size = static_cast<Eigen::Index>(parts.back().size());
+      total += block.size;
+    }
+    Eigen::VectorXd vector(total);
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      const double scale = blocks[b].field == exchange::kDrag ? drag_scale : 1.0;
+      for (Eigen::Index j = 0; j < blocks[b].size; ++j) {
+        vector(blocks[b].offset + j) = scale * parts[b][static_cast<std::size_t>(j)];
+      }
+    }
+    return vector;
+  };
+  // What the next iteration reads from the coupler: the accelerated input, and the fields it
+  // passes on as they are (displaced volumes; in the parallel scheme water fraction and surface).
+  auto publish_input = [&](int64_t index, int32_t iteration, const Eigen::VectorXd& x,
+                           int32_t answered) {
+    const auto [time, dt] = plan_[index];
+    const Stamp stamp{index, time, dt, iteration};
+    for (const auto& block : blocks) {
+      bus_->publish_field(
+          stamp, block.input,
+          std::span<const double>(x.data() + block.offset, static_cast<std::size_t>(block.size)));
+    }
+    for (const auto& solid : solids) {
+      if (exchange::displaces_water(solid)) {
+        const auto volumes = field(solid, exchange::kVolumes, index, answered);
+        bus_->publish_field(stamp, exchange::solid_field_for_flow(exchange::kVolumes, solid),
+                            volumes);
+      }
+      if (flow && !serial) {
+        for (const auto& name :
+             {exchange::water_fraction_field(solid), exchange::surface_field(solid)}) {
+          bus_->publish_field(stamp, name, field(flow->acts_as, name, index, answered));
+        }
+      }
+    }
+  };
+
+  // Length of the window before: a restart continues after a window of the nominal length (an
+  // adaptive restart's first measure may then cost one iteration more, never a wrong result).
+  double previous_dt = options_.restart ? scene_.coupling.window : 0.0;
+  int64_t completed = first - 1;
+  // Window 0 (or the restart window): the initial exchange, not iterated.
+  run_iteration(first, 0);
+  accepted[first] = 0;
+  completed = first;
+  window_one_started = Clock::now();
+  while (true) {
+    const auto index = static_cast<int64_t>(plan_.size());
+    double dt = scene_.coupling.window;
+    if (adaptive) {
+      if (const auto found = stable_dt.find(index - 1); found != stable_dt.end()) {
+        dt = std::min(dt, found->second);
+      }
+    }
+    const double remaining = scene_.duration - next_time;
+    if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
+    if (dt <= scene_.duration * 1e-12) break;
+    plan_.emplace_back(next_time, dt);
+    next_time =
+        adaptive ? next_time + dt
+                 : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
+    book_.plan(index, plan_.back().first, next_time);
+    result.total_windows = std::max(result.total_windows, index);
+
+    // The flow's first iteration takes window k-1's drag rescaled to window k's length (the
+    // window after window 0 takes none: window 0 has no length).
+    const double drag_scale = previous_dt > 0.0 ? previous_dt / dt : 0.0;
+    Eigen::VectorXd x = gather(index - 1, accepted[index - 1], drag_scale);
+    int32_t iteration = 0;
+    Eigen::VectorXd scales;
+    while (true) {
+      run_iteration(index, iteration);
+      const Eigen::VectorXd h = gather(index, iteration, 1.0);
+      if (h.size() != x.size()) {
+        throw Failure(fmt::format("the exchanged fields of {} changed size between iterations",
+                                  window_text(index)));
+      }
+      const auto measure = measure_convergence(blocks, x, h, settings.relative_tolerance);
+      if (measure.converged) break;
+      if (iteration + 1 >= settings.max_iterations) {
+        ++result.windows_at_max_iterations;
+        const std::string text = fmt::format(
+            "{} did not converge in {} coupling iterations ({} is {:.3g} times its tolerance)",
+            window_text(index), settings.max_iterations, measure.worst_field, measure.worst);
+        if (settings.at_max_iterations == scenario::AtMaxIterations::stop) {
+          throw Failure(text + " (coupling.implicit.at_max_iterations: stop)");
+        }
+        if (settings.max_iterations > 1) spdlog::warn("{}; continuing", text);
+        break;
+      }
+      // One scale per window (from its first answer), so the accelerator's columns of one
+      // window are differences in the same units.
+      if (iteration == 0) scales = block_scales(blocks, h);
+      const Eigen::VectorXd next =
+          accelerator.next(x.cwiseQuotient(scales), h.cwiseQuotient(scales)).cwiseProduct(scales);
+      if (!next.allFinite()) {
+        throw Failure(fmt::format("the coupling iteration of {} diverged (iteration {}: {})",
+                                  window_text(index), iteration, measure.worst_field));
+      }
+      x = next;
+      publish_input(index, iteration + 1, x, iteration);
+      ++iteration;
+    }
+    accelerator.end_window();
+    accepted[index] = iteration;
+    result.iterations.push_back(iteration + 1);
+    completed = index;
+    result.windows_completed = completed;
+    previous_dt = dt;
+    bus_->forget_fields_before(index - 2);
+  }
+  await_checkpoints(processes, completed, false);
+  const double windows_wall = seconds_since(window_one_started);
+  double physics_sum = 0.0;
+  double physics_max = 0.0;
+  for (const auto& name : names_) {
+    physics_sum += reports_[name].physics_seconds;
+    physics_max = std::max(physics_max, reports_[name].physics_seconds);
+  }
+  result.windows_wall_seconds = windows_wall;
+  result.critical_physics_seconds = serial ? physics_sum : physics_max;
+  result.overhead_seconds = std::max(0.0, windows_wall - result.critical_physics_seconds);
+  result.overhead_fraction = windows_wall > 0.0 ? result.overhead_seconds / windows_wall : 0.0;
+  result.overhead_ms_per_window =
+      completed >= 1 ? 1e3 * result.overhead_seconds / static_cast<double>(completed) : 0.0;
+  return next_time;
+}
+
+}  // namespace cosim::coupler

@@ -1,0 +1,148 @@
+// Implicit coupling (issue 15) through `cosim run`: a window is iterated until the fields the
+// plants hand the fluid converge, every participant rolled back to the window start between
+// iterations, with the iteration counts in summary.json; one iteration per window is the
+// serial-explicit scheme bit for bit (iteration 0 reads what the explicit scheme reads).
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+
+#include "command.hpp"
+#include "cosim/output/point_series.hpp"
+
+namespace cosim::testing {
+namespace {
+
+const nlohmann::json& info_of(const nlohmann::json& summary, const std::string& name) {
+  for (const auto& p : summary["participants"]) {
+    if (p["name"] == name) return p["report"]["info"];
+  }
+  static const nlohmann::json none;
+  ADD_FAILURE() << "no participant " << name;
+  return none;
+}
+
+struct Run {
+  std::filesystem::path folder;
+  nlohmann::json summary;
+};
+
+Run run_light_blade(const std::string& label, const std::string& options, int limit = 120) {
+  const auto runs = fresh_folder("implicit-" + label);
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet {}", test_scene("light_blade").string(),
+                            runs.string(), options),
+                limit);
+  Run run;
+  run.folder = run_folder_of(result);
+  EXPECT_FALSE(run.folder.empty()) << result.output;
+  if (!run.folder.empty()) run.summary = read_summary(run.folder);
+  return run;
+}
+
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+void expect_same_frames(const std::filesystem::path& a, const std::filesystem::path& b) {
+  const int count = output::count_point_frames(a);
+  ASSERT_GT(count, 1) << a;
+  ASSERT_EQ(output::count_point_frames(b), count) << b;
+  for (int i = 0; i < count; ++i) {
+    const auto one = output::read_point_frame(a, i);
+    const auto two = output::read_point_frame(b, i);
+    EXPECT_EQ(std::memcmp(&one.time, &two.time, sizeof(double)), 0) << one.time;
+    EXPECT_TRUE(same_bits(one.positions, two.positions)) << b << " frame " << i;
+    for (const auto& [name, values] : one.vectors) {
+      EXPECT_TRUE(same_bits(two.vectors.at(name), values)) << name << " frame " << i;
+    }
+  }
+}
+
+TEST(ImplicitCoupling, OneIterationPerWindowIsTheSerialExplicitSchemeBitForBit) {
+  const auto explicit_run = run_light_blade("explicit", "--set duration=0.06");
+  const auto one = run_light_blade("one-iteration",
+                                   "--set duration=0.06 --set coupling.scheme=serial-implicit "
+                                   "--set coupling.implicit.max_iterations=1");
+  ASSERT_FALSE(explicit_run.folder.empty());
+  ASSERT_FALSE(one.folder.empty());
+  ASSERT_TRUE(explicit_run.summary["ok"].get<bool>()) << explicit_run.summary.dump(2);
+  ASSERT_TRUE(one.summary["ok"].get<bool>()) << one.summary.dump(2);
+  // Every window stopped at its one iteration.
+  const auto& implicit = one.summary["implicit"];
+  EXPECT_EQ(implicit["iterations_max"], 1);
+  EXPECT_EQ(implicit["iterations_total"], one.summary["windows_completed"]);
+  expect_same_frames(explicit_run.folder / "fluid_mps" / "particles.h5",
+                     one.folder / "fluid_mps" / "particles.h5");
+  expect_same_frames(explicit_run.folder / "vegetation_beam" / "plants.h5",
+                     one.folder / "vegetation_beam" / "plants.h5");
+  EXPECT_EQ(info_of(one.summary, "vegetation_beam")["drag_impulse"],
+            info_of(explicit_run.summary, "vegetation_beam")["drag_impulse"]);
+}
+
+// The light blade in the surge, iterated: windows take several iterations while the surge loads
+// the blade, every window converges (no window at the limit in the first 0.15 s), and summary.json
+// counts them.
+TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
+  const auto run = run_light_blade("iqn-ils",
+                                   "--set duration=0.15 --set coupling.scheme=serial-implicit "
+                                   "--set coupling.implicit.acceleration=iqn-ils");
+  ASSERT_FALSE(run.folder.empty());
+  ASSERT_TRUE(run.summary["ok"].get<bool>()) << run.summary.dump(2);
+  const auto& implicit = run.summary["implicit"];
+  ASSERT_TRUE(implicit.is_object()) << run.summary.dump(2);
+  EXPECT_EQ(implicit["acceleration"], "iqn-ils");
+  const auto per_window = implicit["iterations_per_window"].get<std::vector<int>>();
+  ASSERT_EQ(static_cast<int64_t>(per_window.size()), run.summary["windows_completed"]);
+  int total = 0;
+  int most = 0;
+  for (const int n : per_window) {
+    EXPECT_GE(n, 1);
+    total += n;
+    most = std::max(most, n);
+  }
+  EXPECT_EQ(implicit["iterations_total"], total);
+  EXPECT_EQ(implicit["iterations_max"], most);
+  EXPECT_EQ(implicit["windows_at_max_iterations"], 0);
+  // While the surge loads the blade the drag changes within a window: a second iteration is
+  // needed there, and the accelerator converges well before the limit.
+  EXPECT_GT(most, 1);
+  EXPECT_LT(most, implicit["max_iterations"].get<int>());
+  std::printf("iterations per window: mean %.2f, max %d, total %d over %zu windows\n",
+              implicit["iterations_mean"].get<double>(), most, total, per_window.size());
+  // A replay plays one answer per window: it refuses a run that iterated, before anything runs.
+  const auto replay =
+      run_cosim(fmt::format("replay {} --participant vegetation_beam --runs-dir {} --quiet",
+                            run.folder.string(), fresh_folder("implicit-replay").string()),
+                60);
+  EXPECT_NE(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("cannot follow coupling iterations"), std::string::npos)
+      << replay.output;
+}
+
+// The limit: with at_max_iterations: stop, a window that cannot converge in its iterations
+// stops the run naming the window.
+TEST(ImplicitCoupling, AWindowAtTheLimitStopsTheRunWhenAskedTo) {
+  const auto runs = fresh_folder("implicit-stop");
+  const auto result = run_cosim(
+      fmt::format(
+          "run {} --runs-dir {} --quiet --set duration=0.15 "
+          "--set coupling.scheme=serial-implicit --set coupling.implicit.max_iterations=2 "
+          "--set coupling.implicit.relative_tolerance=1e-12 "
+          "--set coupling.implicit.absolute_force=0 --set coupling.implicit.absolute_position=0 "
+          "--set coupling.implicit.absolute_velocity=0 "
+          "--set coupling.implicit.at_max_iterations=stop",
+          test_scene("light_blade").string(), runs.string()),
+      120);
+  EXPECT_NE(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("did not converge in 2 coupling iterations"), std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("at_max_iterations: stop"), std::string::npos) << result.output;
+}
+
+}  // namespace
+}  // namespace cosim::testing
