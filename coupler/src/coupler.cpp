@@ -165,6 +165,25 @@ std::string Coupler::window_text(int64_t index) const {
   return fmt::format("window {} (t = {:.6g} s)", index, time);
 }
 
+void Coupler::book_report(const status_t& status, bool new_window,
+                          std::map<int64_t, double>& stable_dt) {
+  auto& report = reports_[status.header.sender];
+  report.windows += new_window ? 1 : 0;
+  report.steps += status.steps;
+  report.compute_seconds = status.compute_seconds;
+  report.cpu_seconds = status.cpu_seconds;
+  report.wait_seconds = status.wait_seconds;
+  if (status.header.window == 0) {
+    report.physics_at_window_zero = status.physics_seconds;
+  } else if (report.physics_at_window_zero >= 0.0) {
+    report.physics_seconds = status.physics_seconds - report.physics_at_window_zero;
+  }
+  if (status.stable_dt > 0.0) {
+    auto [it, inserted] = stable_dt.try_emplace(status.header.window, status.stable_dt);
+    if (!inserted) it->second = std::min(it->second, status.stable_dt);
+  }
+}
+
 double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   // With fixed windows every window's start and length are known, so the coupler grants a few
   // windows ahead and the participants go on as soon as their partners' data is there: the
@@ -227,23 +246,7 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
                          book_.pending(granted));
     last_broadcast = Clock::now();
   };
-  auto accept = [&](const status_t& status) {
-    auto& report = reports_[status.header.sender];
-    report.windows += 1;
-    report.steps += status.steps;
-    report.compute_seconds = status.compute_seconds;
-    report.cpu_seconds = status.cpu_seconds;
-    report.wait_seconds = status.wait_seconds;
-    if (status.header.window == 0) {
-      report.physics_at_window_zero = status.physics_seconds;
-    } else if (report.physics_at_window_zero >= 0.0) {
-      report.physics_seconds = status.physics_seconds - report.physics_at_window_zero;
-    }
-    if (status.stable_dt > 0.0) {
-      auto [it, inserted] = stable_dt.try_emplace(status.header.window, status.stable_dt);
-      if (!inserted) it->second = std::min(it->second, status.stable_dt);
-    }
-  };
+  auto accept = [&](const status_t& status) { book_report(status, true, stable_dt); };
 
   while (true) {
     if (!plan_complete) {

@@ -77,22 +77,9 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
   std::map<int64_t, int32_t> accepted{{first - 1, 0}};
   Clock::time_point window_one_started{};
 
+  // Every iteration's report counts its steps; only iteration 0 counts a window.
   auto accept = [&](const status_t& status) {
-    auto& report = reports_[status.header.sender];
-    report.windows += status.header.iteration == 0 ? 1 : 0;
-    report.steps += status.steps;
-    report.compute_seconds = status.compute_seconds;
-    report.cpu_seconds = status.cpu_seconds;
-    report.wait_seconds = status.wait_seconds;
-    if (status.header.window == 0) {
-      report.physics_at_window_zero = status.physics_seconds;
-    } else if (report.physics_at_window_zero >= 0.0) {
-      report.physics_seconds = status.physics_seconds - report.physics_at_window_zero;
-    }
-    if (status.stable_dt > 0.0) {
-      auto [it, inserted] = stable_dt.try_emplace(status.header.window, status.stable_dt);
-      if (!inserted) it->second = std::min(it->second, status.stable_dt);
-    }
+    book_report(status, status.header.iteration == 0, stable_dt);
   };
 
   // One iteration of one window, granted until every participant's DONE is in.

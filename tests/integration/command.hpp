@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 #include <Eigen/Core>
@@ -33,6 +34,14 @@ nlohmann::json read_summary(const std::filesystem::path& run_dir);
 std::filesystem::path fresh_folder(const std::string& name);
 
 std::filesystem::path test_scene(const std::string& name);
+
+// The `report.info` of participant `name` in a summary.json; throws (failing the test) if none.
+inline const nlohmann::json& info_of(const nlohmann::json& summary, const std::string& name) {
+  for (const auto& p : summary["participants"]) {
+    if (p["name"] == name) return p["report"]["info"];
+  }
+  throw std::out_of_range("summary.json has no participant " + name);
+}
 
 // A JSON array of three numbers (an impulse in summary.json) as a vector.
 inline Eigen::Vector3d vector_of(const nlohmann::json& values) {

@@ -72,15 +72,6 @@ Pair straight_and_restarted(const std::string& scene, const std::string& label,
   return pair;
 }
 
-const nlohmann::json& info_of(const nlohmann::json& summary, const std::string& name) {
-  for (const auto& p : summary["participants"]) {
-    if (p["name"] == name) return p["report"]["info"];
-  }
-  static const nlohmann::json none;
-  ADD_FAILURE() << "no participant " << name;
-  return none;
-}
-
 // The time line continues: same window count and end time, and the summary names the restart.
 void expect_continued(const Pair& pair, double from) {
   const auto& a = pair.straight_summary;

@@ -16,15 +16,6 @@
 namespace cosim::testing {
 namespace {
 
-const nlohmann::json& info_of(const nlohmann::json& summary, const std::string& name) {
-  for (const auto& p : summary["participants"]) {
-    if (p["name"] == name) return p["report"]["info"];
-  }
-  static const nlohmann::json none;
-  ADD_FAILURE() << "no participant " << name;
-  return none;
-}
-
 struct Run {
   std::filesystem::path folder;
   nlohmann::json summary;

@@ -100,6 +100,10 @@ class Coupler {
   // The same for the implicit schemes: one iteration of one window granted at a time, each
   // window iterated until the exchanged fields converge (coupler/src/coupler_implicit.cpp).
   double run_implicit_windows(ProcessGroup& processes, RunResult& result);
+  // A DONE report into reports_ (steps, times; a window when new_window) and the smallest
+  // stable dt of its window into stable_dt.
+  void book_report(const cosim_msgs::status_t& status, bool new_window,
+                   std::map<int64_t, double>& stable_dt);
   std::string window_text(int64_t index) const;
   void finish(ProcessGroup& processes, int64_t index, double time);
   void check_processes(ProcessGroup& processes, const std::string& during);
