@@ -9,6 +9,7 @@
 
 #include "cosim/output/point_series.hpp"
 #include "cosim/scenario/parameter_reader.hpp"
+#include "chain_state.hpp"
 #include "references.hpp"
 #include "scene_3d.hpp"
 #include "scene_keys.hpp"
@@ -261,6 +262,11 @@ ReferenceSettings parse_reference(scenario::Section& reference, const FluidConfi
 
 }  // namespace
 
+double periodic_pool_fill(const SceneSettings& scene, double gravity) {
+  const FishwayGeometry& g = scene.fishway;
+  return g.weir_height + rehbock_head(scene.fill_discharge, g.weir_height, gravity);
+}
+
 FluidConfig parse_config(scenario::Section& section, const scenario::Scene& world_scene) {
   FluidConfig config;
   config.parameters = parse_parameters(section);
@@ -285,8 +291,17 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
     config.restart = parse_restart(restart);
   }
   // The initial scene is still described on restart: it documents the run and sets the tank.
-  config.scene = parse_scene(section.child("scene"), config.parameters.gravity.norm(),
-                             config.parameters.dimension, spacing);
+  auto scene = section.child("scene");
+  config.scene =
+      parse_scene(scene, config.parameters.gravity.norm(), config.parameters.dimension, spacing);
+  if (config.scene.kind == "periodic_pool") {
+    config.initial_state = parse_chain_state(scene, config);
+    if (config.initial_state && config.restart) {
+      scene.fail("chain_state", "a restart replaces the initial scene: give one of the two");
+    }
+  } else {
+    forbid(scene, "chain_state", "kind: periodic_pool");
+  }
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
   const double particles = estimated_particles(config.scene, config.parameters);
   scenario::MemoryBudget("fluid_mps")

@@ -62,6 +62,14 @@ struct RestartSettings {
   int frame = -1;              // negative: from the end
 };
 
+// periodic_pool: start from one pool of a pool_fishway run's output frame (chain_state.hpp).
+struct ChainStateSettings {
+  std::filesystem::path file;   // particles.h5 of a pool_fishway run, or the pool kept from it
+  double time = 0;              // of the frame [s]
+  double time_tolerance = 0.01; // the frame nearest to `time` must lie this close [s]
+  int pool = 1;                 // of the chain, counted from 1 at the inflow
+};
+
 struct ReferenceSettings {
   std::string kind;  // martin_moyce | hydrostatic | canopy_balance | weirs | probe_series
   std::filesystem::path file;
@@ -82,6 +90,8 @@ struct FluidConfig {
   MpsParameters parameters;
   SceneSettings scene;
   std::optional<RestartSettings> restart;
+  // periodic_pool with chain_state: the first state (the chain pool's fluid, the scene's walls).
+  std::optional<MpsState> initial_state;
   double sample_radius = 0;     // ensemble-average radius around solid nodes (seed 000 r_ev)
   // > 0: the fluid leaves the solids' submerged volumes to them, spread over this radius [m],
   // grown from zero over the first displacement_ramp [s] (water present from the start would
@@ -97,5 +107,9 @@ struct FluidConfig {
 
 // `scene`: the top level, already read (output interval, the world's gravity).
 FluidConfig parse_config(scenario::Section& section, const scenario::Scene& scene);
+
+// periodic_pool: the level the pool is filled to, the crest plus the Rehbock head of
+// fill_discharge [m].
+double periodic_pool_fill(const SceneSettings& scene, double gravity);
 
 }  // namespace cosim::mps

@@ -3,6 +3,7 @@
 // solids' nodes, writes particle frames for ParaView, and reports errors against its reference.
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -40,9 +41,7 @@ mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings&
   }
   if (scene.kind == "periodic_pool") {
     // A level pool at the weir head of the discharge it is to carry.
-    const auto& g = scene.fishway;
-    const double fill = g.weir_height + mps::rehbock_head(scene.fill_discharge, g.weir_height,
-                                                          parameters.gravity.norm());
+    const double fill = mps::periodic_pool_fill(scene, parameters.gravity.norm());
     return mps::periodic_pool(parameters, scene.fishway, fill, scene.weirs, scene.wall_layers,
                               scene.dummy_layers);
   }
@@ -261,6 +260,13 @@ class FluidProcess final : public coupler::Solver {
 
   static std::unique_ptr<mps::FluidSystem> make_system(mps::FluidConfig& config) {
     mps::ParticleSet particles = build_scene(config.parameters, config.scene);
+    if (config.initial_state) {
+      // periodic_pool from a chain's pool: its fluid with the walls just built (chain_state.hpp).
+      const auto& kinds = config.initial_state->kinds;
+      spdlog::info("periodic pool from a chain frame: {} fluid particles",
+                   std::count(kinds.begin(), kinds.end(), mps::ParticleKind::fluid));
+      return std::make_unique<mps::FluidSystem>(config.parameters, *config.initial_state);
+    }
     if (!config.restart) {
       return std::make_unique<mps::FluidSystem>(config.parameters, std::move(particles));
     }

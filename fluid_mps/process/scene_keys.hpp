@@ -419,6 +419,34 @@ void visit_parameters(P& p, V& v) {
     s.fill_discharge);
 }
 
+// `scene.chain_state` of a periodic_pool: its water from one pool of a pool_fishway run
+// (cosim/fluid_mps/pool_state.hpp; chain_state.cpp checks the frame against the scene).
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, ChainStateSettings>
+void visit_parameters(P& p, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("file").needed().doc(
+        "particles.h5 of a pool_fishway run at this particle_spacing, or the pool kept from one "
+        "(fishway_pool_state); walls still come from this scene"),
+    p.file);
+  v(Key("time").unit("s").in(Range::non_negative()).needed().doc("of the frame to start from"),
+    p.time);
+  v(Key("time_tolerance")
+        .unit("s")
+        .in(Range::positive())
+        .doc("the frame nearest to time must lie this close (frames are written at the first "
+             "window end past each output time)"),
+    p.time_tolerance);
+  v(Key("pool")
+        .in(Range::between(1, 100))
+        .needed()
+        .doc("the chain's pool, counted from 1 at the inflow (seed 001 Run-OC: the most "
+             "downstream); its fluid is shifted by (-(pool - 1) pool_length, (pool - 1) "
+             "step_height), fluid outside it is left out"),
+    p.pool);
+}
+
 inline constexpr scenario::Choices<OpenBoundarySettings::Control, 3> kInflowControls{
     {{"velocity", OpenBoundarySettings::Control::velocity},
      {"discharge", OpenBoundarySettings::Control::discharge},
