@@ -98,10 +98,11 @@ ChainPool chain_pool(double particle_spacing, const FishwayGeometry& geometry, i
   return result;
 }
 
-double boundary_lattice_spacing(const MpsState& frame) {
+double boundary_lattice_spacing(const MpsState& frame, const ChainPool& pool) {
   std::vector<double> columns;
   for (std::size_t i = 0; i < frame.positions.size(); ++i) {
-    if (boundary(frame.kinds[i])) columns.push_back(frame.positions[i].x());
+    const double x = frame.positions[i].x();
+    if (boundary(frame.kinds[i]) && x >= pool.x_min && x < pool.x_max) columns.push_back(x);
   }
   std::sort(columns.begin(), columns.end());
   double spacing = 0.0;
@@ -133,13 +134,6 @@ MpsState extract_chain_pool(const MpsState& frame, const ChainPool& pool) {
 MpsState periodic_pool_state(const ParticleSet& periodic_scene, const MpsState& frame,
                              const ChainPool& pool, double particle_spacing) {
   const double l0 = particle_spacing;
-  const double spacing = boundary_lattice_spacing(frame);
-  if (std::abs(spacing - l0) > 1e-6 * l0) {
-    throw ChainStateError(
-        "file", fmt::format("the frame's walls stand {:.6g} m apart, not particle_spacing {:.6g} "
-                            "m: the chain ran at another resolution",
-                            spacing, l0));
-  }
   MpsState state;
   const Eigen::Vector3d shift(pool.shift.x(), pool.shift.y(), 0.0);
   for (std::size_t i = 0; i < frame.positions.size(); ++i) {
@@ -155,6 +149,18 @@ MpsState periodic_pool_state(const ParticleSet& periodic_scene, const MpsState& 
         "pool", fmt::format("the frame holds no fluid in pool {} (x from {:.4g} to {:.4g} m): "
                             "the chain has fewer pools",
                             pool.pool, pool.x_min, pool.x_max));
+  }
+  const double spacing = boundary_lattice_spacing(frame, pool);
+  if (spacing == 0.0) {
+    throw ChainStateError("pool", fmt::format("the frame holds no walls in pool {} (x from {:.4g} "
+                                              "to {:.4g} m)",
+                                              pool.pool, pool.x_min, pool.x_max));
+  }
+  if (std::abs(spacing - l0) > 1e-6 * l0) {
+    throw ChainStateError(
+        "file", fmt::format("the frame's walls in pool {} stand {:.6g} m apart, not "
+                            "particle_spacing {:.6g} m: the chain ran at another resolution",
+                            pool.pool, spacing, l0));
   }
   check_geometry(periodic_scene, frame, pool, l0);
   for (std::size_t i = 0; i < periodic_scene.size(); ++i) {

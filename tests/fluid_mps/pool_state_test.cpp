@@ -72,7 +72,7 @@ TEST(PoolState, EveryPoolOfTheChainLandsOnThePeriodicPool) {
   const FishwayGeometry g;
   const MpsState frame = chain_frame(l0, g);
   const ParticleSet scene = periodic_scene(l0, g);
-  EXPECT_NEAR(boundary_lattice_spacing(frame), l0, 1e-12);
+  EXPECT_NEAR(boundary_lattice_spacing(frame, chain_pool(l0, g, 2)), l0, 1e-12);
   const int scene_boundary = count_kind(scene, ParticleKind::wall) +
                              count_kind(scene, ParticleKind::dummy);
   for (int k = 1; k <= g.pools; ++k) {

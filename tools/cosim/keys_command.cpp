@@ -120,6 +120,10 @@ std::vector<Group> fluid_groups() {
       fmt::format("The inflow, a soluble moving wall (kind: {}; required there)",
                   mps::scene_kinds_where(mps::has_inflow)),
       scene_keys, "scene.inflow."));
+  groups.push_back(group<mps::ChainStateSettings>(
+      "The start of a periodic_pool from one pool of a pool_fishway run's frame (kind: "
+      "periodic_pool; absent or null: the pool starts level)",
+      scene_keys, "scene.chain_state."));
   Group solids = group<mps::ObstacleKeys>(
       "Solids in a 3D tank (dimension: 3): `scene.obstacles` boxes and `scene.solids` STL "
       "surfaces, one per entry",

@@ -41,9 +41,10 @@ class ChainStateError : public std::invalid_argument {
   std::string key_;
 };
 
-// The spacing of the frame's wall and dummy lattice: the smallest gap between two distinct
-// columns of boundary particles (0 when it has fewer than two columns) [m].
-double boundary_lattice_spacing(const MpsState& frame);
+// The spacing of the frame's wall and dummy lattice in the pool's reach (the chain's moving
+// inflow wall stands off the lattice, upstream of the first pool): the smallest gap between two
+// distinct columns of boundary particles there (0 when there are fewer than two columns) [m].
+double boundary_lattice_spacing(const MpsState& frame, const ChainPool& pool);
 
 // Particles of `frame` (any kind but inactive) with x in the pool's reach, unshifted: what the
 // bundle keeps of a chain run (fishway_pool_state).
@@ -52,8 +53,8 @@ MpsState extract_chain_pool(const MpsState& frame, const ChainPool& pool);
 // The periodic pool's start: the frame's fluid in the pool's reach, shifted, then the walls and
 // dummies of `periodic_scene` (periodic_pool's set) in their order, at rest, pressure zero (the
 // first step's pressure solve sets them). Time and step start at zero. Throws ChainStateError
-// when the frame's lattice spacing differs from l0 (key file), holds no fluid in the reach
-// (pool), or when the chain's walls and dummies in the reach, shifted, are not the periodic
+// when the frame holds no fluid in the reach (key pool), when its lattice spacing there differs
+// from l0 (file), or when the chain's walls and dummies in the reach, shifted, are not the periodic
 // scene's in x in [0, L) cell for cell (pool: another pool length, step, crest or partition).
 MpsState periodic_pool_state(const ParticleSet& periodic_scene, const MpsState& frame,
                              const ChainPool& pool, double particle_spacing);
