@@ -83,6 +83,20 @@ void check_geometry(const ParticleSet& scene, const MpsState& frame, const Chain
                   (first.second + 0.5) * l0));
 }
 
+// "2, 3": the pools of reach `length` (counted from 1 at x = 0) the frame holds fluid in.
+std::string pools_with_fluid(const MpsState& frame, double length) {
+  std::vector<int> pools;
+  for (std::size_t i = 0; i < frame.positions.size(); ++i) {
+    if (frame.kinds[i] != ParticleKind::fluid) continue;
+    const int k = static_cast<int>(std::floor(frame.positions[i].x() / length)) + 1;
+    if (std::find(pools.begin(), pools.end(), k) == pools.end()) pools.push_back(k);
+  }
+  std::sort(pools.begin(), pools.end());
+  std::string names;
+  for (const int k : pools) names += (names.empty() ? "" : ", ") + std::to_string(k);
+  return names.empty() ? "none" : names;
+}
+
 }  // namespace
 
 ChainPool chain_pool(double particle_spacing, const FishwayGeometry& geometry, int pool) {
@@ -146,9 +160,10 @@ MpsState periodic_pool_state(const ParticleSet& periodic_scene, const MpsState& 
   }
   if (state.positions.empty()) {
     throw ChainStateError(
-        "pool", fmt::format("the frame holds no fluid in pool {} (x from {:.4g} to {:.4g} m): "
-                            "the chain has fewer pools",
-                            pool.pool, pool.x_min, pool.x_max));
+        "pool", fmt::format("the frame holds no fluid in pool {} (x from {:.4g} to {:.4g} m); "
+                            "its fluid lies in pools {}",
+                            pool.pool, pool.x_min, pool.x_max,
+                            pools_with_fluid(frame, pool.x_max - pool.x_min)));
   }
   const double spacing = boundary_lattice_spacing(frame, pool);
   if (spacing == 0.0) {
