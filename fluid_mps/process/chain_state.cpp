@@ -35,18 +35,18 @@ output::PointFrame frame_at(scenario::Section& section, const ChainStateSettings
     }
   }
   int nearest = low;
-  if (low > 0 && std::abs(frame_time(s.file, low - 1) - s.time) <
-                     std::abs(frame_time(s.file, low) - s.time)) {
+  if (low > 0 &&
+      std::abs(frame_time(s.file, low - 1) - s.time) < std::abs(frame_time(s.file, low) - s.time)) {
     nearest = low - 1;
   }
   output::PointFrame frame = output::read_point_frame(s.file, nearest);
   if (std::abs(frame.time - s.time) > s.time_tolerance) {
-    section.fail("time", fmt::format("{} has no frame within {:.3g} s of t = {:.6g} s: its {} "
-                                     "frames run from {:.6g} to {:.6g} s, the nearest is at "
-                                     "{:.6g} s",
-                                     s.file.string(), s.time_tolerance, s.time, frames,
-                                     frame_time(s.file, 0), frame_time(s.file, frames - 1),
-                                     frame.time));
+    section.fail("time",
+                 fmt::format("{} has no frame within {:.3g} s of t = {:.6g} s: its {} "
+                             "frames run from {:.6g} to {:.6g} s, the nearest is at "
+                             "{:.6g} s",
+                             s.file.string(), s.time_tolerance, s.time, frames,
+                             frame_time(s.file, 0), frame_time(s.file, frames - 1), frame.time));
   }
   return frame;
 }
@@ -64,8 +64,8 @@ MpsState solver_state(scenario::Section& section, const output::PointFrame& fram
   auto field = [&](const auto& map, const char* name) -> const auto& {
     const auto found = map.find(name);
     if (found == map.end()) {
-      section.fail("file", fmt::format("{}: the frame at t = {:.6g} s has no '{}'", file,
-                                       frame.time, name));
+      section.fail(
+          "file", fmt::format("{}: the frame at t = {:.6g} s has no '{}'", file, frame.time, name));
     }
     return found->second;
   };
@@ -90,8 +90,7 @@ std::optional<MpsState> parse_chain_state(scenario::Section& scene, const FluidC
   if (!scene.has("chain_state")) return std::nullopt;
   ChainStateSettings s;
   scenario::read_parameters(section, s);
-  const MpsState frame =
-      solver_state(section, frame_at(section, s), config.frame, s.file.string());
+  const MpsState frame = solver_state(section, frame_at(section, s), config.frame, s.file.string());
   // The periodic scene's walls, as main.cpp builds them (on a copy of the parameters).
   MpsParameters parameters = config.parameters;
   std::vector<Weir> weirs;
@@ -106,11 +105,10 @@ std::optional<MpsState> parse_chain_state(scenario::Section& scene, const FluidC
   }
   const double l0 = config.parameters.particle_spacing;
   try {
-    return periodic_pool_state(periodic, frame, chain_pool(l0, scene_settings.fishway, s.pool),
-                               l0);
+    return periodic_pool_state(periodic, frame, chain_pool(l0, scene_settings.fishway, s.pool), l0);
   } catch (const ChainStateError& error) {
-    section.fail(error.key(), fmt::format("{} (t = {:.6g} s): {}", s.file.string(), frame.time,
-                                          error.what()));
+    section.fail(error.key(),
+                 fmt::format("{} (t = {:.6g} s): {}", s.file.string(), frame.time, error.what()));
   }
 }
 

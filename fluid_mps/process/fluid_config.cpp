@@ -7,9 +7,9 @@
 #include <map>
 #include <utility>
 
+#include "chain_state.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/scenario/parameter_reader.hpp"
-#include "chain_state.hpp"
 #include "references.hpp"
 #include "scene_3d.hpp"
 #include "scene_keys.hpp"

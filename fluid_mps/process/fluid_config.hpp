@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "cosim/coupler/frame.hpp"
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fishway.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
-#include "cosim/coupler/frame.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/scenario/section.hpp"
 #include "probe_series.hpp"
@@ -40,12 +40,12 @@ struct SceneSettings {
   double block_height = 0;           // open_channel: height of the soluble moving wall block
   int block_columns = 4, pool_particles = 400;
   int wall_layers = 2, dummy_layers = 2;
-  OpenBoundarySettings inflow;  // open_channel, pool_fishway
-  ChannelOutlet outlet;         // open_channel: level bed and adverse slope beyond `length`
-  FishwayGeometry fishway;      // pool_fishway, periodic_pool
+  OpenBoundarySettings inflow;     // open_channel, pool_fishway
+  ChannelOutlet outlet;            // open_channel: level bed and adverse slope beyond `length`
+  FishwayGeometry fishway;         // pool_fishway, periodic_pool
   bool fill_to_weir_head = false;  // pool_fishway: sets fishway.initial_head from the inflow
-  double fill_discharge = 0;    // periodic_pool: fill to the crest plus the weir head of this q
-  std::vector<Weir> weirs;      // filled by the fishway scene builders
+  double fill_discharge = 0;       // periodic_pool: fill to the crest plus the weir head of this q
+  std::vector<Weir> weirs;         // filled by the fishway scene builders
   // flume: fluid past this x leaves the flow (mps::remove_fluid_beyond; scene_3d.hpp) [m]
   double outlet_x = std::numeric_limits<double>::infinity();
 };
@@ -64,10 +64,10 @@ struct RestartSettings {
 
 // periodic_pool: start from one pool of a pool_fishway run's output frame (chain_state.hpp).
 struct ChainStateSettings {
-  std::filesystem::path file;   // particles.h5 of a pool_fishway run, or the pool kept from it
-  double time = 0;              // of the frame [s]
-  double time_tolerance = 0.01; // the frame nearest to `time` must lie this close [s]
-  int pool = 1;                 // of the chain, counted from 1 at the inflow
+  std::filesystem::path file;    // particles.h5 of a pool_fishway run, or the pool kept from it
+  double time = 0;               // of the frame [s]
+  double time_tolerance = 0.01;  // the frame nearest to `time` must lie this close [s]
+  int pool = 1;                  // of the chain, counted from 1 at the inflow
 };
 
 struct ReferenceSettings {
@@ -92,14 +92,14 @@ struct FluidConfig {
   std::optional<RestartSettings> restart;
   // periodic_pool with chain_state: the first state (the chain pool's fluid, the scene's walls).
   std::optional<MpsState> initial_state;
-  double sample_radius = 0;     // ensemble-average radius around solid nodes (seed 000 r_ev)
+  double sample_radius = 0;  // ensemble-average radius around solid nodes (seed 000 r_ev)
   // > 0: the fluid leaves the solids' submerged volumes to them, spread over this radius [m],
   // grown from zero over the first displacement_ramp [s] (water present from the start would
   // otherwise be blasted away in one step).
   double displacement_radius = 0;
   double displacement_ramp = 0.1;
-  double span = 1;              // 2D: the width along y the slice stands for [m]
-  coupler::SolverFrame frame;   // world <-> the library's coordinates
+  double span = 1;             // 2D: the width along y the slice stands for [m]
+  coupler::SolverFrame frame;  // world <-> the library's coordinates
   double output_interval = 0;
   std::optional<ReferenceSettings> reference;
   std::optional<ObservationSettings> observation;

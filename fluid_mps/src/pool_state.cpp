@@ -53,8 +53,8 @@ int unmatched(const std::map<Cell, ParticleKind>& a, const std::map<Cell, Partic
 void check_geometry(const ParticleSet& scene, const MpsState& frame, const ChainPool& pool,
                     double l0) {
   const double length = pool.x_max - pool.x_min;
-  const auto own = boundary_cells(scene.positions, scene.kinds, Eigen::Vector2d::Zero(), length,
-                                  l0);
+  const auto own =
+      boundary_cells(scene.positions, scene.kinds, Eigen::Vector2d::Zero(), length, l0);
   // Only the chain's particles inside the reach are shifted into [0, L).
   std::vector<Eigen::Vector3d> positions;
   std::vector<ParticleKind> kinds;

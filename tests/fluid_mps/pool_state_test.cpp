@@ -19,7 +19,9 @@ namespace {
 Eigen::Vector3d velocity_at(const Eigen::Vector3d& x) {
   return {0.3 + 2.0 * x.x(), -0.1 + 5.0 * x.y(), 0.0};
 }
-double pressure_at(const Eigen::Vector3d& x) { return 1000.0 + 3000.0 * x.x() - 9810.0 * x.y(); }
+double pressure_at(const Eigen::Vector3d& x) {
+  return 1000.0 + 3000.0 * x.x() - 9810.0 * x.y();
+}
 
 // A chain frame: the pool_fishway set with those velocities and pressures on its fluid.
 MpsState chain_frame(double l0, const FishwayGeometry& geometry) {
@@ -73,8 +75,8 @@ TEST(PoolState, EveryPoolOfTheChainLandsOnThePeriodicPool) {
   const MpsState frame = chain_frame(l0, g);
   const ParticleSet scene = periodic_scene(l0, g);
   EXPECT_NEAR(boundary_lattice_spacing(frame, chain_pool(l0, g, 2)), l0, 1e-12);
-  const int scene_boundary = count_kind(scene, ParticleKind::wall) +
-                             count_kind(scene, ParticleKind::dummy);
+  const int scene_boundary =
+      count_kind(scene, ParticleKind::wall) + count_kind(scene, ParticleKind::dummy);
   for (int k = 1; k <= g.pools; ++k) {
     const ChainPool pool = chain_pool(l0, g, k);
     const MpsState state = periodic_pool_state(scene, frame, pool, l0);
@@ -142,8 +144,7 @@ TEST(PoolState, FramesThatCannotStartThePoolAreRefusedWithTheirKey) {
   // Another crest height, step or pool length in the periodic scene.
   FishwayGeometry lower = g;
   lower.weir_height = 0.15;
-  EXPECT_EQ(key_of_refusal(periodic_scene(l0, lower), frame, chain_pool(l0, lower, 2), l0),
-            "pool");
+  EXPECT_EQ(key_of_refusal(periodic_scene(l0, lower), frame, chain_pool(l0, lower, 2), l0), "pool");
   FishwayGeometry steeper = g;
   steeper.step_height = 0.08;
   EXPECT_EQ(key_of_refusal(periodic_scene(l0, steeper), frame, chain_pool(l0, steeper, 2), l0),

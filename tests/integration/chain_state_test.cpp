@@ -13,8 +13,8 @@
 namespace cosim::testing {
 namespace {
 
-const std::filesystem::path kBundle = std::filesystem::path(COSIM_SCENARIOS) /
-                                      "fishway_periodic_pool";
+const std::filesystem::path kBundle =
+    std::filesystem::path(COSIM_SCENARIOS) / "fishway_periodic_pool";
 const std::filesystem::path kKept = kBundle / "chain_pool3_t6.h5";
 
 int count_label(const output::PointFrame& frame, int kind) {
@@ -37,12 +37,11 @@ void expect_refused(const std::string& overrides, const std::string& key,
 
 TEST(ChainState, ShortRunFromTheKeptPool) {
   const auto runs = fresh_folder("chain-state");
-  const auto result =
-      run_cosim(fmt::format("run {} --runs-dir {} --quiet --set duration=0.1 --set "
-                            "output_interval=0.05 --set "
-                            "participants.fluid_mps.reference.average_from=0.05",
-                            kBundle.string(), runs.string()),
-                120);
+  const auto result = run_cosim(fmt::format("run {} --runs-dir {} --quiet --set duration=0.1 --set "
+                                            "output_interval=0.05 --set "
+                                            "participants.fluid_mps.reference.average_from=0.05",
+                                            kBundle.string(), runs.string()),
+                                120);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const auto run = run_folder_of(result);
   const auto kept = output::read_point_frame(kKept, 0);
