@@ -83,6 +83,13 @@ TEST(ChainState, ValidateRefusesABadChainState) {
                  "not particle_spacing");
   expect_refused("--set participants.fluid_mps.scene.weir_height=0.18", "pool",
                  "are not this scene's");
+  // A restart from an output frame replaces the scene: the two starts exclude each other.
+  const auto both =
+      run_cosim(fmt::format("validate {} --set participants.fluid_mps.restart.file={}",
+                            kBundle.string(), kKept.string()));
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_NE(both.output.find("scene.chain_state': a restart replaces"), std::string::npos)
+      << both.output;
   // A frame of a 3D run: particles off the x-z plane.
   const auto folder = fresh_folder("chain-state-3d");
   {
