@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 
@@ -161,10 +162,27 @@ TEST(Fluid3d, StillWaterHydrostaticPressure) {
   for (const auto& [name, metric] : metrics.items()) {
     if (name.rfind("pressure_at_depth_", 0) != 0) continue;
     ++probes;
-    // Measured at l0 = 1.25 cm: 6.9 / 4.3 / 1.4 % at depths 2.5 / 5 / 7.5 cm (docs/validation.md).
-    EXPECT_LT(metric["relative_error"].get<double>(), 0.1) << name << ": " << metric.dump();
+    // Measured at l0 = 1.25 cm: 6.9 / 4.3 / 1.4 % low at depths 2.5 / 5 / 7.5 cm
+    // (docs/validation.md, still_water_3d).
+    EXPECT_LT(metric["relative_error"].get<double>(), 0.08) << name << ": " << metric.dump();
   }
   EXPECT_EQ(probes, 3) << metrics.dump(1);
+  // Most of that error is the sinking of the water as its lattice loosens: 0.94 mm (0.08 l0)
+  // over 1-2 s; below the sunk level the probes read 3.3 / 2.5 / 0.2 % low. The water stays at
+  // rest: 1.3e-4 J/kg (2.8e-3 J/kg with a collision distance of 0.5 l0).
+  const auto& info = summary["participants"][0]["report"]["info"];
+  const double l0 = 0.0125;
+  ASSERT_TRUE(info.contains("water_level_drop")) << info.dump(1);
+  EXPECT_GT(info["water_level_drop"].get<double>(), 0.0);
+  EXPECT_LT(info["water_level_drop"].get<double>(), 0.25 * l0);
+  int below = 0;
+  for (const auto& [name, value] : info.items()) {
+    if (name.rfind("pressure_error_below_water_level_", 0) != 0) continue;
+    ++below;
+    EXPECT_LT(std::abs(value.get<double>()), 0.045) << name;
+  }
+  EXPECT_EQ(below, 3) << info.dump(1);
+  EXPECT_LT(info["mean_kinetic_energy"].get<double>(), 5e-4);
 }
 
 TEST(Fluid3d, ValidateRefusesSceneKindsWithoutA3dBuilder) {
