@@ -24,12 +24,12 @@ namespace {
 
 struct Options {
   std::map<std::string, double> values{
-      {"l0", 0.01},          {"length", 0.1},      {"width", 0.1},      {"depth", 0.1},
-      {"height", 0.15},      {"duration", 2.0},    {"average_from", 1.0}, {"gradient", 3.1},
-      {"laplacian", 3.1},    {"density_radius", 2.1}, {"beta", 0.97},   {"walls", 2},
-      {"dummies", 2},        {"margin", 3.1},      {"probe_radius", 1.5}, {"collision", 1.0},
-      {"mixed", 0},          {"gamma", 0.2},       {"form", 0},
-      {"probe_scale", 1.0}, {"shifting", 0.0}};
+      {"l0", 0.01},       {"length", 0.1},         {"width", 0.1},        {"depth", 0.1},
+      {"height", 0.15},   {"duration", 2.0},       {"average_from", 1.0}, {"gradient", 3.1},
+      {"laplacian", 3.1}, {"density_radius", 2.1}, {"beta", 0.97},        {"walls", 2},
+      {"dummies", 2},     {"margin", 3.1},         {"probe_radius", 1.5}, {"collision", 1.0},
+      {"mixed", 0},       {"gamma", 0.2},          {"form", 0},           {"probe_scale", 1.0},
+      {"shifting", 0.0}};
   double operator[](const std::string& key) const { return values.at(key); }
 };
 
@@ -95,15 +95,10 @@ struct Layer {
   double p_axis = 0, z_axis = 0, n_axis = 0;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  const Options o = parse(argc, argv);
-  const double l0 = o["l0"], length = o["length"], width = o["width"], depth = o["depth"];
+MpsParameters parameters_of(const Options& o) {
   MpsParameters p;
   p.dimension = 3;
-  p.particle_spacing = l0;
+  p.particle_spacing = o["l0"];
   p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
   p.collision_distance_ratio = o["collision"];
   p.radius_density_over_l0 = o["density_radius"];
@@ -114,120 +109,154 @@ int main(int argc, char** argv) {
   if (o["mixed"] > 0) p.source_term = MpsParameters::SourceTerm::mixed;
   p.shifting_coefficient = o["shifting"];
   p.gradient_form = static_cast<MpsParameters::GradientForm>(static_cast<int>(o["form"]));
-  FluidSystem system(
-      p, still_water_tank_3d(p, length, width, depth, o["height"], static_cast<int>(o["walls"]),
-                             static_cast<int>(o["dummies"])));
-  const double rho_g = p.density * 9.81;
-  const int layers = static_cast<int>(std::lround(depth / l0)) + 2;
-  std::vector<Layer> profile(layers);
-  const double margin = o["margin"] * l0;
-  const double scale = o["probe_scale"];  // probes at 0.025, 0.05, 0.075 m times this
-  const std::vector<double> probe_depths{0.025 * scale, 0.05 * scale, 0.075 * scale};
-  std::vector<double> probe_sum(3, 0.0), probe_count(3, 0.0);
-  double floor_sum = 0, floor_n = 0, kinetic_sum = 0, samples = 0;
-  double window_sum = 0, window_expected = 0, window_start = 0;
-  const auto start = std::chrono::steady_clock::now();
-  long steps = 0;
-  std::printf("# t_from t_to  mean p / mean rho g (H - z) of all water, KE per particle [J/kg], "
-              "2 x mean z of the water [m], highest water [m]\n");
-  double window_kinetic = 0, window_samples = 0, window_z = 0, window_n = 0, top = 0;
-  while (system.time() < o["duration"] - 1e-9) {
-    system.step(system.stable_dt());
-    ++steps;
+  return p;
+}
+
+// The time series (every 0.2 s) and the time means from average_from on.
+class Profile {
+ public:
+  explicit Profile(const Options& o)
+      : l0_(o["l0"]),
+        length_(o["length"]),
+        width_(o["width"]),
+        depth_(o["depth"]),
+        margin_(o["margin"] * o["l0"]),
+        probe_radius_(o["probe_radius"] * o["l0"]),
+        layers_(static_cast<std::size_t>(std::lround(o["depth"] / o["l0"])) + 2) {
+    const double scale = o["probe_scale"];  // probes at 0.025, 0.05, 0.075 m times this
+    probe_depths_ = {0.025 * scale, 0.05 * scale, 0.075 * scale};
+    std::printf(
+        "# t_from t_to  mean p / mean rho g (H - z) of all water, KE per particle [J/kg], "
+        "2 x mean z of the water [m], highest water [m]\n");
+  }
+
+  // Every step: the window sums; their line every 0.2 s. Returns the fluid's mean u^2/2.
+  double watch(const FluidSystem& system) {
     const auto& x = system.positions();
-    const auto& pr = system.pressures();
-    const auto& kind = system.kinds();
     double kinetic = 0, fluid = 0;
     for (int i = 0; i < system.particle_count(); ++i) {
-      if (kind[i] != ParticleKind::fluid) continue;
+      if (system.kinds()[i] != ParticleKind::fluid) continue;
       kinetic += 0.5 * system.velocities()[i].squaredNorm();
       ++fluid;
-      window_sum += pr[i];
-      window_expected += rho_g * (depth - x[i].z());
-      window_z += x[i].z();
-      ++window_n;
-      top = std::max(top, x[i].z());
+      w_.p += system.pressures()[i];
+      w_.expected += rho_g_ * (depth_ - x[i].z());
+      w_.z += x[i].z();
+      ++w_.n;
+      w_.top = std::max(w_.top, x[i].z());
     }
-    window_kinetic += kinetic / fluid;
-    ++window_samples;
-    if (system.time() >= window_start + 0.2 - 1e-9) {
-      const Moments m = lattice_moments(system, length, width, margin,
-                                        depth - p.radius_gradient_over_l0 * l0 - 0.5 * l0);
+    w_.kinetic += kinetic / fluid;
+    ++w_.samples;
+    if (system.time() >= w_.start + 0.2 - 1e-9) {
+      const double re_g = system.parameters().radius_gradient_over_l0 * l0_;
+      const Moments m =
+          lattice_moments(system, length_, width_, margin_, depth_ - re_g - 0.5 * l0_);
       std::printf("%.2f %.2f  %.4f  %.3e  %.5f  %.5f  n/n0 %.4f  sum w_g/n0_g %.4f  gain_zz %.4f\n",
-                  window_start, system.time(), window_sum / window_expected,
-                  window_kinetic / window_samples, 2.0 * window_z / window_n, top, m.density,
-                  m.weight, m.zz);
-      window_start = system.time();
-      window_sum = window_expected = window_kinetic = window_samples = window_z = window_n = 0;
-      top = 0;
+                  w_.start, system.time(), w_.p / w_.expected, w_.kinetic / w_.samples,
+                  2.0 * w_.z / w_.n, w_.top, m.density, m.weight, m.zz);
+      w_ = Window{};
+      w_.start = system.time();
     }
-    if (system.time() < o["average_from"]) continue;
-    ++samples;
-    kinetic_sum += kinetic / fluid;
+    return kinetic / fluid;
+  }
+
+  void average(const FluidSystem& system, double kinetic) {
+    ++samples_;
+    kinetic_sum_ += kinetic;
+    const auto& x = system.positions();
+    const auto& pr = system.pressures();
     for (int i = 0; i < system.particle_count(); ++i) {
       const Eigen::Vector3d& xi = x[i];
-      if (kind[i] == ParticleKind::wall) {
-        // The top floor layer (centre -l0/2) away from the side walls.
-        if (std::abs(xi.z() + 0.5 * l0) < 0.25 * l0 && xi.x() > margin &&
-            xi.x() < length - margin && xi.y() > margin && xi.y() < width - margin) {
-          floor_sum += pr[i];
-          ++floor_n;
+      const bool core = xi.x() > margin_ && xi.x() < length_ - margin_ && xi.y() > margin_ &&
+                        xi.y() < width_ - margin_;
+      if (system.kinds()[i] == ParticleKind::wall) {
+        if (core && std::abs(xi.z() + 0.5 * l0_) < 0.25 * l0_) {  // the floor's top layer
+          floor_sum_ += pr[i];
+          ++floor_n_;
         }
         continue;
       }
-      if (kind[i] != ParticleKind::fluid) continue;
-      const int k = static_cast<int>(std::floor(xi.z() / l0));
-      if (k < 0 || k >= layers) continue;
-      Layer& layer = profile[k];
-      layer.p_all += pr[i];
-      layer.z_all += xi.z();
-      ++layer.n_all;
-      const bool core = xi.x() > margin && xi.x() < length - margin && xi.y() > margin &&
-                        xi.y() < width - margin;
-      if (core) {
-        layer.p_core += pr[i];
-        layer.z_core += xi.z();
-        ++layer.n_core;
-      }
-      if (std::hypot(xi.x() - 0.5 * length, xi.y() - 0.5 * width) < 0.75 * l0) {
-        layer.p_axis += pr[i];
-        layer.z_axis += xi.z();
-        ++layer.n_axis;
+      const int k = static_cast<int>(std::floor(xi.z() / l0_));
+      if (system.kinds()[i] != ParticleKind::fluid || k < 0 || k >= int(layers_.size())) continue;
+      Layer& layer = layers_[k];
+      add(layer.p_all, layer.z_all, layer.n_all, pr[i], xi.z());
+      if (core) add(layer.p_core, layer.z_core, layer.n_core, pr[i], xi.z());
+      if (std::hypot(xi.x() - 0.5 * length_, xi.y() - 0.5 * width_) < 0.75 * l0_) {
+        add(layer.p_axis, layer.z_axis, layer.n_axis, pr[i], xi.z());
       }
     }
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d probe(0.5 * length, 0.5 * width, depth - probe_depths[k]);
-      probe_sum[k] += mean_pressure_at(system, probe, o["probe_radius"] * l0);
-      int count = 0;
+    for (std::size_t k = 0; k < probe_depths_.size(); ++k) {
+      const Eigen::Vector3d probe(0.5 * length_, 0.5 * width_, depth_ - probe_depths_[k]);
+      probe_sum_[k] += mean_pressure_at(system, probe, probe_radius_);
       for (int i = 0; i < system.particle_count(); ++i) {
-        count += kind[i] == ParticleKind::fluid && (x[i] - probe).norm() < o["probe_radius"] * l0;
+        probe_count_[k] +=
+            system.kinds()[i] == ParticleKind::fluid && (x[i] - probe).norm() < probe_radius_;
       }
-      probe_count[k] += count;
     }
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("# particles %d  steps %ld  wall %.1f s  mean KE per particle %.3e J/kg\n",
-              system.particle_count(), steps, wall, kinetic_sum / samples);
-  std::printf("# layer  z_mean  n/sample  p_all/rgh  | core: n p/rgh | axis: n p/rgh   [rgh = "
-              "rho g (H - z_mean)]\n");
-  for (int k = 0; k < layers; ++k) {
-    const Layer& L = profile[k];
-    if (L.n_all == 0) continue;
+
+  void print() const {
+    std::printf("# mean KE per particle %.3e J/kg\n", kinetic_sum_ / samples_);
+    std::printf(
+        "# layer  z_mean  n/sample  p_all/rgh  | core: n p/rgh | axis: n p/rgh   [rgh = "
+        "rho g (H - z_mean)]\n");
     auto ratio = [&](double ps, double zs, double n) {
-      return n > 0 ? (ps / n) / (rho_g * (depth - zs / n)) : 0.0;
+      return n > 0 ? (ps / n) / (rho_g_ * (depth_ - zs / n)) : 0.0;
     };
-    std::printf("%2d  %.4f  %6.1f  %.4f  | %6.1f %.4f | %5.2f %.4f   p_all %.1f Pa\n", k,
-                L.z_all / L.n_all, L.n_all / samples, ratio(L.p_all, L.z_all, L.n_all),
-                L.n_core / samples, ratio(L.p_core, L.z_core, L.n_core), L.n_axis / samples,
-                ratio(L.p_axis, L.z_axis, L.n_axis), L.p_all / L.n_all);
+    for (std::size_t k = 0; k < layers_.size(); ++k) {
+      const Layer& L = layers_[k];
+      if (L.n_all == 0) continue;
+      std::printf("%2zu  %.4f  %6.1f  %.4f  | %6.1f %.4f | %5.2f %.4f   p_all %.1f Pa\n", k,
+                  L.z_all / L.n_all, L.n_all / samples_, ratio(L.p_all, L.z_all, L.n_all),
+                  L.n_core / samples_, ratio(L.p_core, L.z_core, L.n_core), L.n_axis / samples_,
+                  ratio(L.p_axis, L.z_axis, L.n_axis), L.p_all / L.n_all);
+    }
+    std::printf("# floor wall (top layer, core) p / rho g (H + l0/2) = %.4f\n",
+                floor_sum_ / floor_n_ / (rho_g_ * (depth_ + 0.5 * l0_)));
+    for (std::size_t k = 0; k < probe_depths_.size(); ++k) {
+      const double expected = rho_g_ * probe_depths_[k], mean = probe_sum_[k] / samples_;
+      std::printf("# probe depth %.3f: %.1f Pa (%+.2f %%), %.1f particles\n", probe_depths_[k],
+                  mean, 100.0 * (mean - expected) / expected, probe_count_[k] / samples_);
+    }
   }
-  std::printf("# floor wall (top layer, core) p / rho g (H + l0/2) = %.4f\n",
-              floor_sum / floor_n / (rho_g * (depth + 0.5 * l0)));
-  for (int k = 0; k < 3; ++k) {
-    const double expected = rho_g * probe_depths[k];
-    std::printf("# probe depth %.3f: %.1f Pa (%+.2f %%), %.1f particles\n", probe_depths[k],
-                probe_sum[k] / samples, 100.0 * (probe_sum[k] / samples - expected) / expected,
-                probe_count[k] / samples);
+
+ private:
+  static void add(double& p_sum, double& z_sum, double& n, double p, double z) {
+    p_sum += p;
+    z_sum += z;
+    ++n;
   }
+  struct Window {
+    double start = 0, p = 0, expected = 0, kinetic = 0, samples = 0, z = 0, n = 0, top = 0;
+  };
+  double l0_, length_, width_, depth_, margin_, probe_radius_;
+  double rho_g_ = 1000.0 * 9.81;
+  std::vector<Layer> layers_;
+  std::vector<double> probe_depths_, probe_sum_ = std::vector<double>(3, 0.0),
+                                     probe_count_ = std::vector<double>(3, 0.0);
+  double floor_sum_ = 0, floor_n_ = 0, kinetic_sum_ = 0, samples_ = 0;
+  Window w_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  const Options o = parse(argc, argv);
+  MpsParameters p = parameters_of(o);
+  FluidSystem system(
+      p, still_water_tank_3d(p, o["length"], o["width"], o["depth"], o["height"],
+                             static_cast<int>(o["walls"]), static_cast<int>(o["dummies"])));
+  Profile profile(o);
+  const auto start = std::chrono::steady_clock::now();
+  while (system.time() < o["duration"] - 1e-9) {
+    system.step(system.stable_dt());
+    const double kinetic = profile.watch(system);
+    if (system.time() >= o["average_from"]) profile.average(system, kinetic);
+  }
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("# particles %d  steps %ld  wall %.1f s\n", system.particle_count(),
+              system.step_count(), wall);
+  profile.print();
   return 0;
 }
