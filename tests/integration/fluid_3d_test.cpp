@@ -163,15 +163,16 @@ TEST(Fluid3d, StillWaterHydrostaticPressure) {
     if (name.rfind("pressure_at_depth_", 0) != 0) continue;
     ++probes;
     // Measured at l0 = 1.25 cm (water 0.2 m deep, corrected_interior): 3.8 / 3.3 / 2.1 % low
-    // at depths 5 / 10 / 15 cm (docs/validation.md, still_water_3d; 6.9 / 4.3 / 1.4 % at
-    // 2.5 / 5 / 7.5 cm in the former 0.1 m of water with the minimum form).
-    EXPECT_LT(metric["relative_error"].get<double>(), 0.05) << name << ": " << metric.dump();
+    // at depths 5 / 10 / 15 cm, up to 4.7 / 3.2 / 2.9 % when beta or the CG tolerance is nudged
+    // (docs/validation.md, still_water_3d; 6.9 / 4.3 / 1.4 % at 2.5 / 5 / 7.5 cm in the former
+    // 0.1 m of water with the minimum form).
+    EXPECT_LT(metric["relative_error"].get<double>(), 0.06) << name << ": " << metric.dump();
   }
   EXPECT_EQ(probes, 3) << metrics.dump(1);
   // Most of that error is the sinking of the water as its lattice loosens: 1.67 mm (0.13 l0)
-  // over 1-2 s; below the sunk level the probes read 0.5 / 1.7 / 1.0 % low. The water stays at
-  // rest: 7.7e-5 J/kg (1.3e-4 J/kg in the former bundle, 2.8e-3 J/kg there with a collision
-  // distance of 0.5 l0).
+  // over 1-2 s; below the sunk level the probes read 0.5 / 1.7 / 1.0 % low (at most 1.7 % in
+  // the nudged runs). The water stays at rest: 7.7e-5 J/kg (up to 1.0e-4 nudged; 1.3e-4 J/kg in
+  // the former bundle, 2.8e-3 J/kg there with a collision distance of 0.5 l0).
   const auto& info = summary["participants"][0]["report"]["info"];
   const double l0 = 0.0125;
   ASSERT_TRUE(info.contains("water_level_drop")) << info.dump(1);
