@@ -150,9 +150,12 @@ TEST(Fluid3d, BoxObstacleStaysSolid) {
 
 TEST(Fluid3d, StillWaterHydrostaticPressure) {
   const auto runs = fresh_folder("fluid-3d-still-water");
+  // 2 000 windows of about 6 000 particles: on a loaded machine one fluid answer was once
+  // silent for more than the default 5 s (window 1183), so the hang detector waits 30 s here.
   const auto result = run_cosim(
       fmt::format(
-          "run {} --runs-dir {} --quiet --set participants.fluid_mps.particle_spacing=0.0125",
+          "run {} --runs-dir {} --quiet --set participants.fluid_mps.particle_spacing=0.0125 "
+          "--set coupling.timeout=30",
           scenario("still_water_3d"), runs.string()),
       240);
   ASSERT_EQ(result.exit_code, 0) << result.output;
