@@ -58,6 +58,7 @@ class ReferenceTracker {
   std::vector<double> pressure_sums_;
   int pressure_samples_ = 0;
   double kinetic_energy_sum_ = 0.0;  // sum over samples of the fluid's mean u^2 / 2 [J/kg]
+  double level_sum_ = 0.0;           // hydrostatic: sum over samples of the water level [m]
   double density_ = 1000;
   double last_time_ = 0;
   // canopy_balance

@@ -217,10 +217,22 @@ TEST(MpsScenes3d, StillWaterStartsHydrostatic) {
     ++samples;
   }
   const double mean = sum / samples, expected = p.density * 9.81 * 0.5 * depth;
+  // The water level: twice the mean height of the water. Over this first 0.3 s the lattice holds
+  // (it loosens and sinks later, by 1-2 mm over 1-2 s in the 0.1 m tank: docs/validation.md).
+  double height = 0.0;
+  int fluid = 0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    height += system.positions()[i].z();
+    ++fluid;
+  }
+  const double level = 2.0 * height / fluid;
   std::cout << "[still water 3d] particles=" << system.particle_count()
             << " steps=" << system.step_count() << " p_mid=" << mean << " Pa (rho g h " << expected
-            << " Pa) max_speed=" << max_speed << " m/s\n";
-  EXPECT_NEAR(mean, expected, 0.1 * expected);
+            << " Pa) max_speed=" << max_speed << " m/s level=" << level << " m\n";
+  // Measured: 1.6 % below rho g h.
+  EXPECT_NEAR(mean, expected, 0.03 * expected);
+  EXPECT_NEAR(level, depth, 0.05 * l0);
   EXPECT_LT(max_speed, 0.1);
 }
 

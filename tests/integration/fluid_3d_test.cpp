@@ -1,13 +1,14 @@
 // The 3D fluid scenes through cosim at CI size: scenarios/dam_break_3d at a/l0 = 5 (6 000
-// particles) against Martin & Moyce, scenarios/still_water_3d at l0 = 1.25 cm against rho g depth,
-// and the 3D output: HDF5 frames with every field and positions spread over x, y and z, and the
-// XDMF index next to them; a restart from a 3D frame; a box obstacle stays solid. 2D-only scene
-// kinds are refused in 3D by `cosim validate`.
+// particles) against Martin & Moyce, scenarios/still_water_3d at l0 = 1.25 cm against rho g depth
+// (about 60 s), and the 3D output: HDF5 frames with every field and positions spread over x, y and
+// z, and the XDMF index next to them; a restart from a 3D frame; a box obstacle stays solid.
+// 2D-only scene kinds are refused in 3D by `cosim validate`.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 
@@ -149,11 +150,14 @@ TEST(Fluid3d, BoxObstacleStaysSolid) {
 
 TEST(Fluid3d, StillWaterHydrostaticPressure) {
   const auto runs = fresh_folder("fluid-3d-still-water");
+  // 2 000 windows of about 6 000 particles: on a loaded machine one fluid answer was once
+  // silent for more than the default 5 s (window 1183), so the hang detector waits 30 s here.
   const auto result = run_cosim(
       fmt::format(
-          "run {} --runs-dir {} --quiet --set participants.fluid_mps.particle_spacing=0.0125",
+          "run {} --runs-dir {} --quiet --set participants.fluid_mps.particle_spacing=0.0125 "
+          "--set coupling.timeout=30",
           scenario("still_water_3d"), runs.string()),
-      120);
+      240);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const auto summary = read_summary(run_folder_of(result));
   const auto& metrics = metrics_of(summary);
@@ -161,10 +165,30 @@ TEST(Fluid3d, StillWaterHydrostaticPressure) {
   for (const auto& [name, metric] : metrics.items()) {
     if (name.rfind("pressure_at_depth_", 0) != 0) continue;
     ++probes;
-    // Measured at l0 = 1.25 cm: 6.9 / 4.3 / 1.4 % at depths 2.5 / 5 / 7.5 cm (docs/validation.md).
-    EXPECT_LT(metric["relative_error"].get<double>(), 0.1) << name << ": " << metric.dump();
+    // Measured at l0 = 1.25 cm (water 0.2 m deep, corrected_interior): 3.8 / 3.3 / 2.1 % low
+    // at depths 5 / 10 / 15 cm, up to 4.7 / 3.2 / 2.9 % when beta or the CG tolerance is nudged
+    // (docs/validation.md, still_water_3d; 6.9 / 4.3 / 1.4 % at 2.5 / 5 / 7.5 cm in the former
+    // 0.1 m of water with the minimum form).
+    EXPECT_LT(metric["relative_error"].get<double>(), 0.06) << name << ": " << metric.dump();
   }
   EXPECT_EQ(probes, 3) << metrics.dump(1);
+  // Most of that error is the sinking of the water as its lattice loosens: 1.67 mm (0.13 l0)
+  // over 1-2 s; below the sunk level the probes read 0.5 / 1.7 / 1.0 % low (at most 1.7 % in
+  // the nudged runs). The water stays at rest: 7.7e-5 J/kg (up to 1.0e-4 nudged; 1.3e-4 J/kg in
+  // the former bundle, 2.8e-3 J/kg there with a collision distance of 0.5 l0).
+  const auto& info = summary["participants"][0]["report"]["info"];
+  const double l0 = 0.0125;
+  ASSERT_TRUE(info.contains("water_level_drop")) << info.dump(1);
+  EXPECT_GT(info["water_level_drop"].get<double>(), 0.0);
+  EXPECT_LT(info["water_level_drop"].get<double>(), 0.25 * l0);
+  int below = 0;
+  for (const auto& [name, value] : info.items()) {
+    if (name.rfind("pressure_error_below_water_level_", 0) != 0) continue;
+    ++below;
+    EXPECT_LT(std::abs(value.get<double>()), 0.025) << name;
+  }
+  EXPECT_EQ(below, 3) << info.dump(1);
+  EXPECT_LT(info["mean_kinetic_energy"].get<double>(), 3e-4);
 }
 
 TEST(Fluid3d, ValidateRefusesSceneKindsWithoutA3dBuilder) {
