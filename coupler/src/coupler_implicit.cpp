@@ -19,17 +19,14 @@
 #include "cosim/coupler/coupler.hpp"
 #include "cosim/coupler/exchange.hpp"
 #include "cosim/coupler/implicit.hpp"
+#include "steady_clock.hpp"
 
 namespace cosim::coupler {
 
 namespace {
-using Clock = std::chrono::steady_clock;
 using cosim_msgs::status_t;
 using cosim_msgs::window_t;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 AccelerationOptions acceleration_options(const scenario::ImplicitSettings& settings) {
   AccelerationOptions options;

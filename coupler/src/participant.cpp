@@ -1,5 +1,7 @@
 #include "cosim/coupler/participant.hpp"
 
+#include "steady_clock.hpp"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -7,14 +9,6 @@
 #include <ctime>
 
 namespace cosim::coupler {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-}  // namespace
 
 Participant::Participant(ParticipantOptions options)
     : options_(std::move(options)), started_(Clock::now()) {

@@ -27,8 +27,10 @@ std::filesystem::path ProcessContext::checkpoint_folder(int64_t window) const {
   return run_dir / "checkpoints" / fmt::format("window_{:08d}", window);
 }
 
-void ProcessContext::declare_frame(int dimension, double span, const Eigen::Vector3d& gravity) {
+void ProcessContext::declare_frame(int dimension, double span, const Eigen::Vector3d& gravity,
+                                   bool limits_window) {
   FrameDeclaration declaration;
+  declaration.limits_window = limits_window;
   declaration.dimension = dimension;
   declaration.span = dimension == 2 ? span : 0.0;
   declaration.gravity = gravity;
