@@ -107,7 +107,11 @@ void Coupler::collect(ProcessGroup& processes, const Collection& collection) {
       std::erase(pending, sender);
       if (collection.accept) collection.accept(status);
     }
-    check_processes(processes, collection.during);
+    for (const auto& exit : processes.poll_exits()) {
+      if (exit.interrupted && collection.on_interrupt) collection.on_interrupt();
+      throw Failure(
+          fmt::format("{} during {} (see logs/{}.log)", exit.describe(), collection.during, exit.name));
+    }
     check_silence(pending, collection.during);
     if (collection.check) collection.check(pending, seconds_since(start));
   }

@@ -144,6 +144,7 @@ int run_process(int argc, char** argv, const std::string& program,
     options.chunk_values = context.scene.coupling.chunk_values;
     options.loss_probability = loss;
     options.loss_seed = std::hash<std::string>{}(section_name) ^ static_cast<uint64_t>(run_id);
+    options.rollback = context.scene.coupling.is_implicit();
     context.participant = std::make_unique<Participant>(options);
     context.declare_frame(3, 0.0, context.scene.world.gravity);
   } catch (const std::exception& error) {

@@ -92,6 +92,9 @@ class Coupler {
     std::function<void(const std::vector<std::string>& pending, double waited)> check;
     // Replaces the plain broadcast of `command` (an implicit iteration's grant).
     std::function<void()> broadcast;
+    // Called when the run is interrupted (SIGINT/SIGTERM) during the collection, before it stops:
+    // an implicit window's chance to save the state after the last accepted window.
+    std::function<void()> on_interrupt;
   };
   void collect(ProcessGroup& processes, const Collection& collection);
   void handshake(ProcessGroup& processes);
