@@ -1,6 +1,7 @@
 #include "cosim/coupler/coupler.hpp"
 
 #include "cosim/coupler/frame.hpp"
+#include "steady_clock.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -14,13 +15,9 @@
 namespace cosim::coupler {
 
 namespace {
-using Clock = std::chrono::steady_clock;
 using cosim_msgs::status_t;
 using cosim_msgs::window_t;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 std::vector<std::pair<std::string, std::string>> names_of(const scenario::Scene& scene) {
   std::vector<std::pair<std::string, std::string>> names;
@@ -110,7 +107,11 @@ void Coupler::collect(ProcessGroup& processes, const Collection& collection) {
       std::erase(pending, sender);
       if (collection.accept) collection.accept(status);
     }
-    check_processes(processes, collection.during);
+    for (const auto& exit : processes.poll_exits()) {
+      if (exit.interrupted && collection.on_interrupt) collection.on_interrupt();
+      throw Failure(
+          fmt::format("{} during {} (see logs/{}.log)", exit.describe(), collection.during, exit.name));
+    }
     check_silence(pending, collection.during);
     if (collection.check) collection.check(pending, seconds_since(start));
   }
@@ -157,6 +158,9 @@ void Coupler::handshake(ProcessGroup& processes) {
       !problem.empty()) {
     throw Failure("participants disagree on the world: " + problem);
   }
+  for (const auto& [name, declaration] : declarations) {
+    if (declaration.limits_window) limiting_.insert(name);
+  }
 }
 
 std::string Coupler::window_text(int64_t index) const {
@@ -179,18 +183,26 @@ void Coupler::book_report(const status_t& status, bool new_window,
     report.physics_seconds = status.physics_seconds - report.physics_at_window_zero;
   }
   if (status.stable_dt > 0.0) {
+    // Windows after this one may already be sized and granted without it.
+    if (!limiting_.contains(status.header.sender)) {
+      throw Failure(fmt::format(
+          "'{}' reported a stable dt of {:.6g} s in {} but declared at the handshake that it does "
+          "not limit the window (a process of another build?)",
+          status.header.sender, status.stable_dt, window_text(status.header.window)));
+    }
     auto [it, inserted] = stable_dt.try_emplace(status.header.window, status.stable_dt);
     if (!inserted) it->second = std::min(it->second, status.stable_dt);
   }
 }
 
 double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
-  // With fixed windows every window's start and length are known, so the coupler grants a few
-  // windows ahead and the participants go on as soon as their partners' data is there: the
-  // coupler's own round trip leaves the critical path. Adaptive windows need every stable dt of
-  // window k before window k + 1 can be sized, so they are granted one by one.
+  // The coupler grants a few windows ahead and the participants go on as soon as their
+  // partners' data is there: the coupler's own round trip leaves the critical path. An adaptive
+  // window k + 1 is sized from the stable dt of window k, so it is planned once every
+  // participant that limits the window has reported window k; the others (plants, debris:
+  // sub-cycling) need not have finished it, and they get the grant while they compute.
   const bool adaptive = scene_.coupling.adaptive_window;
-  const int64_t lookahead = adaptive ? 0 : 2;
+  const int64_t lookahead = 2;
   const double resend = scene_.coupling.resend_interval;
   plan_.assign(1, {0.0, 0.0});  // window 0 exchanges initial states
   double next_time = 0.0;
@@ -234,6 +246,16 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   std::map<std::string, std::map<int64_t, status_t>> early;  // DONEs heard out of order
   for (const auto& name : names_) done[name] = first - 1;
   int64_t completed = first - 1;
+  // The last window whose stable dt is known from every limiting participant.
+  auto sized_through = [&] {
+    int64_t lowest = std::numeric_limits<int64_t>::max();
+    for (const auto& name : limiting_) {
+      if (const auto found = done.find(name); found != done.end()) {
+        lowest = std::min(lowest, found->second);
+      }
+    }
+    return lowest;
+  };
   int64_t granted = first - 1;
   auto last_broadcast = Clock::now();
   auto last_check = Clock::now();
@@ -249,12 +271,11 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   auto accept = [&](const status_t& status) { book_report(status, true, stable_dt); };
 
   while (true) {
-    if (!plan_complete) {
-      if (adaptive) {
-        if (static_cast<int64_t>(plan_.size()) == completed + 1) plan_next();
-      } else {
-        while (!plan_complete && static_cast<int64_t>(plan_.size()) <= completed + 2 + lookahead)
-          plan_next();
+    {
+      const int64_t sized = adaptive ? sized_through() : std::numeric_limits<int64_t>::max();
+      while (!plan_complete && static_cast<int64_t>(plan_.size()) <= completed + 2 + lookahead &&
+             static_cast<int64_t>(plan_.size()) - 1 <= sized) {
+        plan_next();
       }
     }
     const int64_t last_planned = static_cast<int64_t>(plan_.size()) - 1;

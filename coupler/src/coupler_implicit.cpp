@@ -19,17 +19,14 @@
 #include "cosim/coupler/coupler.hpp"
 #include "cosim/coupler/exchange.hpp"
 #include "cosim/coupler/implicit.hpp"
+#include "steady_clock.hpp"
 
 namespace cosim::coupler {
 
 namespace {
-using Clock = std::chrono::steady_clock;
 using cosim_msgs::status_t;
 using cosim_msgs::window_t;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 AccelerationOptions acceleration_options(const scenario::ImplicitSettings& settings) {
   AccelerationOptions options;
@@ -93,6 +90,15 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
     collection.during = window_text(index) + fmt::format(", iteration {}", iteration);
     collection.failed_during = "in " + collection.during;
     collection.accept = accept;
+    // Stopped from outside mid-window: every participant rolls back to the start of this window
+    // and saves it, the state after the last accepted window (run_solver_loop).
+    collection.on_interrupt = [&, index] {
+      const int64_t last_accepted = index - 1;
+      if (last_accepted <= first) return;
+      book_.request(last_accepted, end_of(last_accepted));
+      await_checkpoints(processes, last_accepted, true);
+      if (book_.complete(last_accepted)) result.windows_completed = last_accepted;
+    };
     const int32_t previous = accepted.contains(index - 1) ? accepted[index - 1] : 0;
     collection.broadcast = [&, index, iteration, previous, time = time, dt = dt] {
       bus_->publish_window(Stamp{index, time, dt, iteration}, window_t::COMMAND_ADVANCE,

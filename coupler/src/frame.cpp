@@ -16,6 +16,7 @@ std::string FrameDeclaration::to_json() const {
   json["dimension"] = dimension;
   json["span"] = span;
   json["gravity"] = {gravity.x(), gravity.y(), gravity.z()};
+  json["limits_window"] = limits_window;
   return json.dump();
 }
 
@@ -33,6 +34,7 @@ FrameDeclaration FrameDeclaration::from_json(const std::string& text, const std:
     const auto gravity = json.at("gravity").get<std::vector<double>>();
     if (gravity.size() != 3) throw std::runtime_error("gravity needs 3 values");
     declaration.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
+    declaration.limits_window = json.value("limits_window", true);
     return declaration;
   } catch (const std::exception& error) {
     throw std::runtime_error(

@@ -1,5 +1,7 @@
 #include "cosim/coupler/participant.hpp"
 
+#include "steady_clock.hpp"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -7,14 +9,6 @@
 #include <ctime>
 
 namespace cosim::coupler {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-}  // namespace
 
 Participant::Participant(ParticipantOptions options)
     : options_(std::move(options)), started_(Clock::now()) {
@@ -131,14 +125,23 @@ void Participant::take_checkpoint_requests(const cosim_msgs::window_t& message) 
       continue;
     }
     // A window already left behind cannot be saved any more; the coupler never asks for one.
-    if (window >= current_.index) checkpoint_requests_.insert(window);
+    if (window >= current_.index || (options_.rollback && window == current_.index - 1)) {
+      checkpoint_requests_.insert(window);
+    }
   }
 }
 
-void Participant::checkpointed(const std::string& description_json) {
+void Participant::checkpointed(const std::string& description_json, int64_t window) {
   const ApiTimer timer(*this);
-  checkpoints_written_[current_.index] = description_json;
-  publish_state(cosim_msgs::status_t::STATE_CHECKPOINTED, 0, 0.0, description_json);
+  checkpoints_written_[window] = description_json;
+  if (window == current_.index) {
+    publish_state(cosim_msgs::status_t::STATE_CHECKPOINTED, 0, 0.0, description_json);
+  } else {
+    cosim_msgs::status_t status{};
+    status.state = cosim_msgs::status_t::STATE_CHECKPOINTED;
+    status.message = description_json;
+    bus_->publish_status(Stamp{window, current_.time, 0.0}, status);
+  }
   last_checkpoint_answer_ = Clock::now();
 }
 
@@ -217,6 +220,14 @@ Window Participant::next_window() {
     if (current_done_ && checkpoint_requests_.erase(current_.index) > 0) {
       Window checkpoint = current_;
       checkpoint.checkpoint = true;
+      wait_seconds_ += seconds_since(wait_start);
+      return checkpoint;
+    }
+    if (current_done_ && options_.rollback && checkpoint_requests_.erase(current_.index - 1) > 0) {
+      Window checkpoint = current_;
+      checkpoint.index = current_.index - 1;
+      checkpoint.checkpoint = true;
+      checkpoint.rolled_back = true;
       wait_seconds_ += seconds_since(wait_start);
       return checkpoint;
     }

@@ -27,8 +27,10 @@ std::filesystem::path ProcessContext::checkpoint_folder(int64_t window) const {
   return run_dir / "checkpoints" / fmt::format("window_{:08d}", window);
 }
 
-void ProcessContext::declare_frame(int dimension, double span, const Eigen::Vector3d& gravity) {
+void ProcessContext::declare_frame(int dimension, double span, const Eigen::Vector3d& gravity,
+                                   bool limits_window) {
   FrameDeclaration declaration;
+  declaration.limits_window = limits_window;
   declaration.dimension = dimension;
   declaration.span = dimension == 2 ? span : 0.0;
   declaration.gravity = gravity;
@@ -142,6 +144,7 @@ int run_process(int argc, char** argv, const std::string& program,
     options.chunk_values = context.scene.coupling.chunk_values;
     options.loss_probability = loss;
     options.loss_seed = std::hash<std::string>{}(section_name) ^ static_cast<uint64_t>(run_id);
+    options.rollback = context.scene.coupling.is_implicit();
     context.participant = std::make_unique<Participant>(options);
     context.declare_frame(3, 0.0, context.scene.world.gravity);
   } catch (const std::exception& error) {

@@ -46,8 +46,12 @@ struct Restored {
   std::vector<std::pair<std::string, std::vector<double>>> fields;
 };
 
+using Fields = std::vector<std::pair<std::string, std::vector<double>>>;
+
+// `fields`: what this participant published in window `window.index` (handed out again by the
+// restart window).
 void write_checkpoint(ProcessContext& context, const Solver& solver, const OutputClock& clock,
-                      const Window& window, const WindowResult& result) {
+                      const Window& window, const WindowResult& result, const Fields& fields) {
   const auto started = std::chrono::steady_clock::now();
   Participant& participant = *context.participant;
   checkpoint::Writer out(context.program);
@@ -56,7 +60,7 @@ void write_checkpoint(ProcessContext& context, const Solver& solver, const Outpu
   out.value("loop.stable_dt", result.stable_dt);
   clock.save(out);
   std::string names;
-  for (const auto& [name, values] : participant.published_fields()) {
+  for (const auto& [name, values] : fields) {
     names += name + '\n';
     out.vector("field." + name, values);
   }
@@ -72,7 +76,8 @@ void write_checkpoint(ProcessContext& context, const Solver& solver, const Outpu
                bytes, seconds);
   participant.checkpointed(nlohmann::json{
       {"file", file.filename().string()}, {"bytes", bytes}, {"write_seconds", seconds}}
-                               .dump());
+                               .dump(),
+                           window.index);
 }
 
 Restored read_checkpoint(ProcessContext& context, Solver& solver, OutputClock& clock) {
@@ -120,15 +125,29 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
   // a checkpoint or the finish comes).
   const bool implicit = context.scene.coupling.is_implicit();
   std::string window_start;
+  // At the start of the window being iterated: the previous window's report and fields.
+  WindowResult start_result;
+  Fields start_fields;
+  Fields last_fields;  // published in the iteration just run (next_window clears them)
   bool output_pending = false;
   while (true) {
     const Window window = participant.next_window();
+    if (window.rolled_back) {
+      // Interrupted mid-window: the state after window `index` is the start of the window being
+      // iterated. Its iterations are dropped (their output frame too); the run stops next.
+      solver.load_checkpoint(checkpoint::Reader(
+          window_start, fmt::format("the start of window {} (in memory)", window.index + 1),
+          context.program));
+      output_pending = false;
+      write_checkpoint(context, solver, clock, window, start_result, start_fields);
+      continue;
+    }
     if (output_pending && (window.checkpoint || window.finish || window.iteration == 0)) {
       write_if_due();
       output_pending = false;
     }
     if (window.checkpoint) {
-      write_checkpoint(context, solver, clock, window, last);
+      write_checkpoint(context, solver, clock, window, last, participant.published_fields());
       continue;
     }
     context.maybe_inject_fault(window.index);
@@ -150,6 +169,8 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
         checkpoint::Writer start(context.program);
         solver.save_checkpoint(start);
         window_start = start.encode();
+        start_result = last;
+        start_fields = std::move(last_fields);
       } else {
         solver.load_checkpoint(checkpoint::Reader(
             window_start, fmt::format("the start of window {} (in memory)", window.index),
@@ -162,6 +183,7 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
       write_if_due();
     }
     participant.done(last.steps, last.stable_dt);
+    if (implicit) last_fields = participant.published_fields();
   }
 }
 

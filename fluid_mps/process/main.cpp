@@ -254,7 +254,8 @@ class FluidProcess final : public coupler::Solver {
     auto section = context.section();
     mps::FluidConfig config = mps::parse_config(section, context.scene);
     context.declare_frame(config.parameters.dimension, config.span,
-                          config.frame.to_world(config.parameters.gravity));
+                          config.frame.to_world(config.parameters.gravity),
+                          /*limits_window=*/true);  // its CFL and viscous limits
     return config;
   }
 

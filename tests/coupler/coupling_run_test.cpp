@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -217,6 +218,114 @@ TEST(CouplingRun, TheLogKeepsEachMessageOnceAndControlLeavesFieldsOut) {
   };
   EXPECT_LT(raw_bytes(control_log) * 3, raw_bytes(all_log));
   std::filesystem::remove_all(folder);
+}
+
+// Adaptive windows: the flow limits the window (its stable dt shrinks window by window), the
+// solid does not. Window k + 1 must be granted to the flow as soon as the flow has reported
+// window k, while the solid still computes window k: the solid waits, before it reports window
+// k, until the flow holds the grant of k + 1. A coupler that sizes windows only once everyone
+// has reported never grants it and the solid gives up waiting.
+struct AdaptiveOutcome {
+  RunResult result;
+  std::vector<double> solid_dts;  // window lengths the solid was given, windows 1..
+  int grants_missed = 0;          // windows in which the flow's grant of k + 1 never came
+};
+
+double flow_stable_dt(int64_t window) { return 1e-3 / (1.0 + 0.05 * static_cast<double>(window)); }
+
+AdaptiveOutcome run_adaptive(int64_t run_id, bool flow_limits) {
+  scenario::Scene scene = make_scene(20);
+  scene.coupling.adaptive_window = true;
+  scene.coupling.timeout = 5.0;
+  CouplerOptions coupler_options;
+  coupler_options.url = run_lcm_url(run_id);
+  coupler_options.run_id = run_id;
+  Coupler coupler(scene, coupler_options);
+  std::atomic<int64_t> flow_granted{-1};
+  AdaptiveOutcome outcome;
+  std::thread flow([&] {
+    Participant participant(options("prescribed_flow", run_id, 0.0));
+    FrameDeclaration declaration;
+    declaration.limits_window = flow_limits;
+    participant.declare(declaration.to_json());
+    FlowLink link(participant, scene);
+    try {
+      while (true) {
+        const auto window = participant.next_window();
+        if (window.finish) {
+          participant.finished("{}");
+          return;
+        }
+        flow_granted = window.index;
+        for (const auto& solid : link.receive_solids(window)) {
+          link.publish_samples(solid.name,
+                               std::vector<Eigen::Vector3d>(solid.positions.size(),
+                                                            Eigen::Vector3d(0.1, 0.0, 0.0)),
+                               std::vector<double>(solid.positions.size(), 1.0));
+        }
+        participant.done(1, flow_stable_dt(window.index));
+      }
+    } catch (const CouplingError&) {
+      // the coupler aborted the run
+    }
+  });
+  std::thread solid([&] {
+    Participant participant(options("vegetation_beam", run_id, 0.0));
+    participant.declare(FrameDeclaration{}.to_json());
+    SolidLink link(participant, scene, 2);
+    const std::vector<Eigen::Vector3d> positions(2, Eigen::Vector3d::Zero());
+    try {
+      while (true) {
+        const auto window = participant.next_window();
+        if (window.finish) {
+          participant.finished("{}");
+          return;
+        }
+        if (window.index > 0) {
+          link.ambient(window);
+          outcome.solid_dts.push_back(window.dt);
+          const bool last = window.end_time() >= scene.duration * (1.0 - 1e-9);
+          const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+          while (!last && flow_granted < window.index + 1 &&
+                 std::chrono::steady_clock::now() < until) {
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+          }
+          if (!last && flow_granted < window.index + 1) ++outcome.grants_missed;
+        }
+        link.publish_state(positions, positions, positions);
+        participant.done(1);
+      }
+    } catch (const CouplingError&) {
+    }
+  });
+  ProcessGroup none;
+  outcome.result = coupler.run(none);
+  flow.join();
+  solid.join();
+  return outcome;
+}
+
+TEST(CouplingRun, AnAdaptiveWindowIsGrantedWhileTheOthersStillCompute) {
+  const auto outcome = run_adaptive(5106, true);
+  ASSERT_TRUE(outcome.result.ok) << outcome.result.failure;
+  EXPECT_EQ(outcome.grants_missed, 0)
+      << "the flow waited for the solid's report before it was given the next window";
+  // The plan is the one the flow's stable dts make: window k + 1 as long as window k allowed.
+  ASSERT_GE(outcome.solid_dts.size(), 10u);
+  EXPECT_EQ(outcome.solid_dts[0], 1e-3);  // window 1 from window 0's stable dt: 1e-3
+  for (std::size_t k = 1; k + 1 < outcome.solid_dts.size(); ++k) {
+    EXPECT_EQ(outcome.solid_dts[k], flow_stable_dt(static_cast<int64_t>(k))) << "window " << k + 1;
+  }
+}
+
+TEST(CouplingRun, AStableDtFromAParticipantThatDeclaredNoLimitStopsTheRun) {
+  const auto outcome = run_adaptive(5107, false);
+  EXPECT_FALSE(outcome.result.ok);
+  EXPECT_NE(outcome.result.failure.find("'prescribed_flow' reported a stable dt of 0.001 s in "
+                                        "window 0 (t = 0 s) but declared at the handshake that "
+                                        "it does not limit the window"),
+            std::string::npos)
+      << outcome.result.failure;
 }
 
 }  // namespace

@@ -70,6 +70,15 @@ TEST(WorldFrame, DeclarationsRoundTripAndMalformedOnesAreNamed) {
   EXPECT_EQ(got.dimension, 2);
   EXPECT_EQ(got.span, 0.25);
   EXPECT_EQ(got.gravity, sent.gravity);
+  EXPECT_FALSE(got.limits_window);
+  FrameDeclaration limiting = sent;
+  limiting.limits_window = true;
+  EXPECT_TRUE(FrameDeclaration::from_json(limiting.to_json(), "fluid_mps").limits_window);
+  // A declaration of an older build says nothing: it may limit the window, so the coupler waits
+  // for it before sizing the next one (as it did for everyone).
+  EXPECT_TRUE(FrameDeclaration::from_json(
+                  R"({"frame": "f", "dimension": 3, "span": 0, "gravity": [0, 0, -9.81]})", "old")
+                  .limits_window);
   try {
     FrameDeclaration::from_json("", "old_solver");
     FAIL() << "an empty declaration must be refused";

@@ -70,7 +70,7 @@ std::map<std::pair<int64_t, std::string>, std::vector<double>> beam_fields(
   std::map<std::pair<int64_t, std::string>, std::vector<double>> fields;
   const auto recording = replay::read_recording(run_dir / "events.lcmlog.zst", "vegetation_beam");
   for (const auto& [window, recorded] : recording.windows) {
-    for (const auto& [field, values] : recorded.fields) fields[{window, field}] = values;
+    for (const auto& [field, values] : recorded.fields) fields[{window.window, field}] = values;
   }
   return fields;
 }

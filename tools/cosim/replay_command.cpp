@@ -169,12 +169,21 @@ int report_replay(const ReplayRequest& request, const scenario::ParticipantEntry
     // The windows after the last whole one may hold what some participants said before the
     // failure stopped the run; the replay never reached them.
     std::erase_if(expected.windows,
-                  [&](const auto& window) { return window.first > end.windows_completed; });
+                  [&](const auto& window) { return window.first.window > end.windows_completed; });
   }
   const auto actual = replay::read_recording(outcome.run_dir / "events.lcmlog.zst", driven.acts_as);
   const auto mismatches = replay::compare_fields(expected, actual);
   std::size_t fields = 0;
-  for (const auto& [index, window] : expected.windows) fields += window.fields.size();
+  std::set<int64_t> windows;
+  for (const auto& [key, window] : expected.windows) {
+    fields += window.fields.size();
+    windows.insert(key.window);
+  }
+  // Implicit schemes: every coupling iteration of every window.
+  const std::string iterations =
+      expected.windows.size() > windows.size()
+          ? fmt::format(" ({} coupling iterations)", expected.windows.size())
+          : std::string();
   int output_files = 0;
   const auto output_problems =
       compare_output_folders(request.recorded_run / driven.acts_as,
@@ -184,12 +193,13 @@ int report_replay(const ReplayRequest& request, const scenario::ParticipantEntry
                                end.windows_completed, end.total_windows, end.failure)
                  : std::string();
   fmt::print(
-      "replayed '{}' against {}{}: {} windows, {} fields, {} output files compared bit for bit\n",
-      driven.acts_as, request.recorded_run.string(), extent, expected.windows.size(), fields,
+      "replayed '{}' against {}{}: {} windows{}, {} fields, {} output files compared bit for "
+      "bit\n",
+      driven.acts_as, request.recorded_run.string(), extent, windows.size(), iterations, fields,
       output_files);
   for (std::size_t i = 0; i < mismatches.size() && i < 10; ++i) {
-    fmt::print("  window {} field '{}': {}\n", mismatches[i].window, mismatches[i].field,
-               mismatches[i].problem);
+    fmt::print("  {} field '{}': {}\n", replay::describe(mismatches[i].window),
+               mismatches[i].field, mismatches[i].problem);
   }
   for (const auto& problem : output_problems) fmt::print("  output {}\n", problem);
   if (fields == 0) {
@@ -223,13 +233,6 @@ int replay_run(const ReplayRequest& request) {
   }
   const RecordedEnd end = recorded_end(request.recorded_run);
   check_recording(request, recorded_log, end);
-  if (recorded.coupling.is_implicit()) {
-    // Its log holds every coupling iteration of a window; a replay plays one answer per window.
-    throw std::runtime_error(fmt::format(
-        "{}: the run used coupling.scheme {}; replay plays one answer per window and cannot "
-        "follow coupling iterations (replay a serial-explicit or parallel-explicit run)",
-        recorded_scenario.string(), recorded.coupling.scheme));
-  }
   if (driven->executable == "replay") {
     throw std::runtime_error(
         fmt::format("'{}' was itself a replay in that run", request.participant));

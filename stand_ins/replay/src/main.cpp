@@ -27,16 +27,24 @@ class ReplayProcess final : public coupler::Solver {
     return advance(window);
   }
   coupler::WindowResult advance(const coupler::Window& window) override {
-    const auto recorded = recording_.windows.find(window.index);
+    // Implicit schemes: every coupling iteration was recorded, and is played back as asked.
+    const replay::WindowKey key{window.index, window.iteration};
+    const auto recorded = recording_.windows.find(key);
     if (recorded == recording_.windows.end() || !recorded->second.done) {
-      // Says what the recording does hold: a run that failed early ends before the scene does.
-      const std::string held =
-          recording_.windows.empty()
-              ? std::string("it holds no window")
-              : fmt::format("it holds windows {} to {}", recording_.windows.begin()->first,
-                            recording_.windows.rbegin()->first);
-      throw std::runtime_error(fmt::format("{}: window {} of '{}' is not in the recording ({})",
-                                           settings_.event_log.string(), window.index,
+      // Says what the recording does hold: a run that failed early ends before the scene does,
+      // and a solver that changed may need other coupling iterations than the recorded ones.
+      std::string held = "it holds no window";
+      if (!recording_.windows.empty()) {
+        held = fmt::format("it holds windows {} to {}", recording_.windows.begin()->first.window,
+                           recording_.windows.rbegin()->first.window);
+        const auto next = recording_.windows.lower_bound({window.index + 1, 0});
+        const auto last = next == recording_.windows.begin() ? next : std::prev(next);
+        if (window.iteration > 0 && last != next && last->first.window == window.index) {
+          held += fmt::format("; window {} iterations 0 to {}", window.index, last->first.iteration);
+        }
+      }
+      throw std::runtime_error(fmt::format("{}: {} of '{}' is not in the recording ({})",
+                                           settings_.event_log.string(), replay::describe(key),
                                            settings_.participant, held));
     }
     for (const auto& [field, values] : recorded->second.fields) participant_.publish(field, values);

@@ -90,7 +90,7 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
   Recording recording;
   recording.participant = participant;
   recording.run_id = coupler_run_id(event_log);
-  std::map<std::pair<int64_t, std::string>, Assembly> assemblies;
+  std::map<std::pair<WindowKey, std::string>, Assembly> assemblies;
   for_each_event(event_log, [&](const StoredEvent& event) {
     if (event.channel == coupler::kFieldChannel) {
       cosim_msgs::field_chunk_t chunk;
@@ -103,7 +103,8 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
                             chunk.chunk_index, chunk.chunk_count, chunk.field, chunk.offset,
                             chunk.offset + chunk.value_count, chunk.total_values));
       }
-      Assembly& assembly = assemblies[{chunk.header.window, chunk.field}];
+      Assembly& assembly =
+          assemblies[{WindowKey{chunk.header.window, chunk.header.iteration}, chunk.field}];
       if (assembly.received.empty()) {
         assembly.values.assign(static_cast<std::size_t>(chunk.total_values), 0.0);
         assembly.received.assign(static_cast<std::size_t>(chunk.chunk_count), false);
@@ -120,7 +121,7 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
       if (status.state == cosim_msgs::status_t::STATE_READY) {
         recording.declaration = status.message;
       } else if (status.state == cosim_msgs::status_t::STATE_DONE) {
-        auto& window = recording.windows[status.header.window];
+        auto& window = recording.windows[{status.header.window, status.header.iteration}];
         window.done = true;
         window.steps = status.steps;
         window.stable_dt = status.stable_dt;
@@ -133,8 +134,8 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
   for (auto& [key, assembly] : assemblies) {
     if (assembly.received_count != static_cast<int32_t>(assembly.received.size())) {
       throw std::runtime_error(fmt::format(
-          "{}: field '{}' of '{}' in window {} is incomplete in the log ({} of {} chunks)",
-          event_log.string(), key.second, participant, key.first, assembly.received_count,
+          "{}: field '{}' of '{}' in {} is incomplete in the log ({} of {} chunks)",
+          event_log.string(), key.second, participant, describe(key.first), assembly.received_count,
           assembly.received.size()));
     }
     recording.windows[key.first].fields[key.second] = std::move(assembly.values);
@@ -150,6 +151,11 @@ std::vector<std::string> recorded_participants(const std::filesystem::path& even
     if (decodes(chunk, event, event_log, "field_chunk_t")) names.insert(chunk.header.sender);
   });
   return {names.begin(), names.end()};
+}
+
+std::string describe(const WindowKey& key) {
+  return key.iteration == 0 ? fmt::format("window {}", key.window)
+                            : fmt::format("window {}, iteration {}", key.window, key.iteration);
 }
 
 std::vector<Mismatch> compare_fields(const Recording& expected, const Recording& actual) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -91,11 +92,15 @@ class Coupler {
     std::function<void(const std::vector<std::string>& pending, double waited)> check;
     // Replaces the plain broadcast of `command` (an implicit iteration's grant).
     std::function<void()> broadcast;
+    // Called when the run is interrupted (SIGINT/SIGTERM) during the collection, before it stops:
+    // an implicit window's chance to save the state after the last accepted window.
+    std::function<void()> on_interrupt;
   };
   void collect(ProcessGroup& processes, const Collection& collection);
   void handshake(ProcessGroup& processes);
-  // Windows 0..N: grants windows ahead (fixed windows) so participants never wait for the
-  // coupler, collects every DONE, and returns the simulated time reached.
+  // Windows 0..N: grants windows ahead so participants never wait for the coupler (an adaptive
+  // window as soon as the participants that limit it have reported the one before), collects
+  // every DONE, and returns the simulated time reached.
   double run_windows(ProcessGroup& processes, RunResult& result);
   // The same for the implicit schemes: one iteration of one window granted at a time, each
   // window iterated until the exchanged fields converge (coupler/src/coupler_implicit.cpp).
@@ -118,6 +123,8 @@ class Coupler {
   CouplerOptions options_;
   std::unique_ptr<Bus> bus_;
   std::vector<std::string> names_;  // acts_as names of the participants
+  // Those that declared at the handshake that their stable dt may shorten a window.
+  std::set<std::string> limiting_;
   std::map<std::string, ParticipantReport> reports_;
   std::vector<std::pair<double, double>> plan_;  // (start, length) of window i, once known
   std::chrono::steady_clock::time_point started_;

@@ -24,6 +24,10 @@ struct FrameDeclaration {
   int dimension = 3;
   double span = 0.0;  // [m] width along y a 2D participant stands for (0 for 3D)
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  // [m/s^2], world frame
+  // Whether its reports carry a stable dt that may shorten an adaptive window. The coupler sizes
+  // window k + 1 as soon as every participant that does has finished window k, and grants it
+  // ahead of the others. A declaration without the field (an older build) counts as limiting.
+  bool limits_window = false;
 
   std::string to_json() const;
   // `who` names the sender in the error message of a malformed declaration.

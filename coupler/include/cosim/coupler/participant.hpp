@@ -34,6 +34,9 @@ struct ParticipantOptions {
   int chunk_values = 4096;
   double loss_probability = 0.0;
   uint64_t loss_seed = 1;
+  // Implicit schemes: the window before the one being iterated can still be saved (from the
+  // window-start state every iteration rolls back to), as a run interrupted mid-window needs.
+  bool rollback = false;
 };
 
 struct Window {
@@ -44,6 +47,9 @@ struct Window {
   bool finish = false;  // the coupler asks for final outputs and metrics
   // Not a window to run: write a checkpoint of the state after window `index` (just done).
   bool checkpoint = false;
+  // A checkpoint asked while window index + 1 is being iterated (implicit schemes): the state
+  // after window `index` is the start of that window, which the solver rolls back to first.
+  bool rolled_back = false;
   // Implicit schemes: the coupling iteration of this window (each starts from the window-start
   // state), and the iteration the coupler accepted for window index - 1. 0 for explicit schemes.
   int32_t iteration = 0;
@@ -75,7 +81,7 @@ class Participant {
   Window next_window();
   // After a checkpoint window: the state is written; `description_json` (file, bytes, seconds)
   // goes to the coupler for the manifest.
-  void checkpointed(const std::string& description_json);
+  void checkpointed(const std::string& description_json, int64_t window);
   // Every field published in the current window, in order (a checkpoint keeps them, so a
   // restarted run hands its partners exactly what they would have received).
   const std::vector<std::pair<std::string, std::vector<double>>>& published_fields() const {

@@ -31,8 +31,10 @@ class ProcessContext {
   std::filesystem::path output_dir() const;
   // Declares this process's frame for the handshake: the dimension, the span of a 2D one, and
   // the gravity [m/s^2, world frame] its physics actually uses. Until a process calls it, it
-  // declares 3D under the scene's world gravity. Call before the first window.
-  void declare_frame(int dimension, double span, const Eigen::Vector3d& gravity);
+  // declares 3D under the scene's world gravity. Call before the first window. A process whose
+  // windows report a stable dt (WindowResult::stable_dt > 0) declares `limits_window`.
+  void declare_frame(int dimension, double span, const Eigen::Vector3d& gravity,
+                     bool limits_window = false);
   // This process's file in a checkpoint folder (written by run_solver_loop).
   std::filesystem::path checkpoint_file(const std::filesystem::path& folder) const {
     return folder / (section_name + ".ckpt");

@@ -3,6 +3,7 @@
 // final metrics. The replay stand-in plays this back; `cosim replay` compares against it.
 #pragma once
 
+#include <compare>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -10,6 +11,15 @@
 #include <vector>
 
 namespace cosim::replay {
+
+// A window, and its coupling iteration (implicit schemes; 0 for the explicit ones).
+struct WindowKey {
+  int64_t window = 0;
+  int32_t iteration = 0;
+  auto operator<=>(const WindowKey&) const = default;
+};
+// "window 5", or "window 5, iteration 2" after the first iteration.
+std::string describe(const WindowKey& key);
 
 struct RecordedWindow {
   std::map<std::string, std::vector<double>> fields;
@@ -21,7 +31,7 @@ struct RecordedWindow {
 struct Recording {
   int64_t run_id = 0;
   std::string participant;
-  std::map<int64_t, RecordedWindow> windows;
+  std::map<WindowKey, RecordedWindow> windows;  // every iteration of every window
   std::string declaration;  // frame, dimension, span and gravity declared at the handshake
   bool finished = false;
   std::string metrics_json;
@@ -35,7 +45,7 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
 std::vector<std::string> recorded_participants(const std::filesystem::path& event_log);
 
 struct Mismatch {
-  int64_t window;
+  WindowKey window;
   std::string field;
   std::string problem;
 };
