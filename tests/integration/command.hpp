@@ -25,6 +25,10 @@ std::filesystem::path bin_dir();
 // `cosim` with arguments, from the build's bin folder.
 CommandResult run_cosim(const std::string& arguments, int time_limit_seconds = 120);
 
+// `cosim` with arguments, sent SIGINT after `seconds` (as a user's Ctrl-C); waits for it to end.
+CommandResult interrupt_cosim(const std::string& arguments, int seconds,
+                              int time_limit_seconds = 300);
+
 // The run folder a `cosim run` printed, or empty.
 std::filesystem::path run_folder_of(const CommandResult& result);
 

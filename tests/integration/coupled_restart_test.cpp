@@ -223,10 +223,7 @@ TEST(CoupledRestart, InterruptedRunLeavesACheckpointToContinueFrom) {
   const auto scene = test_scene("debris_box").string();
   const std::string common = fmt::format("--runs-dir {} --quiet", runs.string());
   const auto interrupted =
-      run_command(fmt::format("sh -c '{}/cosim run {} {} --set duration=20 & pid=$!; sleep 2; "
-                              "kill -INT $pid; wait $pid'",
-                              COSIM_BIN_DIR, scene, common),
-                  300);
+      interrupt_cosim(fmt::format("run {} {} --set duration=20", scene, common), 2);
   EXPECT_EQ(interrupted.exit_code, 130) << interrupted.output;
   const auto stopped = run_folder_of(interrupted);
   ASSERT_FALSE(stopped.empty()) << interrupted.output;

@@ -192,11 +192,8 @@ TEST(ImplicitCoupling, ARunContinuedFromACheckpointIteratesTheSameBits) {
 TEST(ImplicitCoupling, AnInterruptedRunSavesTheLastAcceptedWindow) {
   const auto runs = fresh_folder("implicit-interrupted");
   const std::string common = fmt::format("--runs-dir {} --quiet {}", runs.string(), kIqnIls);
-  const auto interrupted = run_command(
-      fmt::format("sh -c '{}/cosim run {} {} --set duration=20 & pid=$!; sleep 3; "
-                  "kill -INT $pid; wait $pid'",
-                  COSIM_BIN_DIR, test_scene("light_blade").string(), common),
-      300);
+  const auto interrupted = interrupt_cosim(
+      fmt::format("run {} {} --set duration=20", test_scene("light_blade").string(), common), 3);
   EXPECT_EQ(interrupted.exit_code, 130) << interrupted.output;
   const auto stopped = run_folder_of(interrupted);
   ASSERT_FALSE(stopped.empty()) << interrupted.output;
