@@ -95,9 +95,9 @@ void check_fixed_plate(bool standing) {
                                : add_flat_plate(state, 0.1, 0.1, count, l0, l0, removed);
   FluidSystem system(p, state);
   const double dt = 1e-3;
-  for (int n = 0; n < 300; ++n) step_with_plate(system, plate, dt, Eigen::Vector3d::Zero());
+  for (int n = 0; n < 200; ++n) step_with_plate(system, plate, dt, Eigen::Vector3d::Zero());
   Eigen::Vector3d load = Eigen::Vector3d::Zero();
-  const int samples = 300;
+  const int samples = 200;
   for (int n = 0; n < samples; ++n) {
     load += step_with_plate(system, plate, dt, Eigen::Vector3d::Zero()) / samples;
   }
@@ -125,10 +125,10 @@ TEST(MpsMovingWall, AcceleratedPlateFeelsTheAddedMassOfTheWater) {
   const Plate plate = add_plate(state, 0.3, 0.17, count, spacing, p.particle_spacing, removed);
   FluidSystem system(p, state);
   const double dt = 5e-4, a = 10.0, ramp = 0.02;  // 0 -> 0.2 m/s -> 0, 4 mm travelled
-  for (int n = 0; n < 1000; ++n) step_with_plate(system, plate, dt, Eigen::Vector3d::Zero());
+  for (int n = 0; n < 600; ++n) step_with_plate(system, plate, dt, Eigen::Vector3d::Zero());
   Eigen::Vector3d rest = Eigen::Vector3d::Zero();
-  for (int n = 0; n < 200; ++n)
-    rest += step_with_plate(system, plate, dt, Eigen::Vector3d::Zero()) / 200.0;
+  for (int n = 0; n < 100; ++n)
+    rest += step_with_plate(system, plate, dt, Eigen::Vector3d::Zero()) / 100.0;
   const int steps = static_cast<int>(std::lround(ramp / dt));
   Eigen::Vector3d accelerating = Eigen::Vector3d::Zero(), decelerating = Eigen::Vector3d::Zero();
   for (int n = 0; n < steps; ++n) {  // the velocity at mid-step
