@@ -12,6 +12,8 @@ SolidLink::SolidLink(Participant& participant, const scenario::Scene& scene,
     : participant_(participant),
       serial_(scene.coupling.is_serial()),
       implicit_(scene.coupling.is_implicit()),
+      resolved_(
+          exchange::resolved_by_flow(scene.coupling.interface.resolved_plants, participant.name())),
       point_count_(point_count) {
   if (const auto* flow = scene.flow()) flow_name_ = flow->acts_as;
 }
@@ -56,6 +58,12 @@ AmbientFlow SolidLink::receive(const std::string& sender, int64_t flow_window, i
                                     exchange::surface_field(me), sender, flow_window, point_count_,
                                     flow.surface_elevation.size()));
   }
+  if (resolved_) {
+    const std::string load_field = exchange::fluid_load_field(me);
+    flow.fluid_load = exchange::unpack(
+        participant_.receive(sender, load_field, flow_window, iteration), point_count_,
+        fmt::format("field '{}' from '{}' (window {})", load_field, sender, flow_window));
+  }
   std::erase_if(cache_,
                 [&](const auto& item) { return std::get<1>(item.first) < flow_window - 1; });
   cache_[key] = flow;
@@ -66,7 +74,8 @@ std::pair<AmbientFlow, AmbientFlow> SolidLink::ambient(const Window& window) {
   if (flow_name_.empty()) {
     AmbientFlow still{std::vector<Eigen::Vector3d>(point_count_, Eigen::Vector3d::Zero()),
                       std::vector<double>(point_count_, 0.0),
-                      std::vector<double>(point_count_, -std::numeric_limits<double>::infinity())};
+                      std::vector<double>(point_count_, -std::numeric_limits<double>::infinity()),
+                      {}};
     return {still, still};
   }
   const auto windows = exchange::flow_windows_for_solid(window.index, serial_);
@@ -82,7 +91,10 @@ std::pair<AmbientFlow, AmbientFlow> SolidLink::ambient(const Window& window) {
 }
 
 FlowLink::FlowLink(Participant& participant, const scenario::Scene& scene, SolverFrame frame)
-    : participant_(participant), frame_(frame), implicit_(scene.coupling.is_implicit()) {
+    : participant_(participant),
+      frame_(frame),
+      implicit_(scene.coupling.is_implicit()),
+      resolved_plants_(scene.coupling.interface.resolved_plants) {
   for (const auto* solid : scene.solids()) solids_.push_back(solid->acts_as);
 }
 
@@ -152,6 +164,12 @@ void FlowLink::publish_samples(const std::string& solid,
   std::vector<double> surface(surface_elevation.begin(), surface_elevation.end());
   if (surface.empty()) surface.assign(water_fraction.size(), std::nan(""));
   participant_.publish(exchange::surface_field(solid), surface);
+}
+
+void FlowLink::publish_fluid_load(const std::string& solid, std::span<const Eigen::Vector3d> load) {
+  std::vector<Eigen::Vector3d> world(load.size());
+  for (std::size_t i = 0; i < world.size(); ++i) world[i] = frame_.force_to_world(load[i]);
+  participant_.publish(exchange::fluid_load_field(solid), exchange::pack(world));
 }
 
 void FlowLink::save_checkpoint(checkpoint::Writer& out) const {

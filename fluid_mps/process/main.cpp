@@ -142,6 +142,9 @@ class FluidProcess final : public coupler::Solver {
 
   coupler::WindowResult advance(const coupler::Window& window) override {
     const auto solids = link_.receive_solids(window, config_.displacement_radius > 0.0);
+    for (const auto& solid : solids) {
+      if (link_.resolves(solid.name)) place_blade(solid);
+    }
     int window_steps = 0;
     if (window.dt > 0.0) window_steps = step_window(window, solids);
     if (observation_) observation_->record(*system_);
@@ -153,6 +156,7 @@ class FluidProcess final : public coupler::Solver {
           system_->sample_velocity(solid.positions, config_.sample_radius, &water_);
       system_->sample_surface(solid.positions, config_.sample_radius, surface_);
       link_.publish_samples(solid.name, velocity, water_, surface_);
+      if (link_.resolves(solid.name)) link_.publish_fluid_load(solid.name, blade_load(window));
     }
     return {window_steps, system_->stable_dt()};
   }
@@ -202,6 +206,10 @@ class FluidProcess final : public coupler::Solver {
       info["momentum_budget_residual"] = (change - budget_sources_).norm() / budget_scale_;
     }
     info["fluid_momentum_change"] = json(config_.frame.force_to_world(change));
+    if (!blade_.empty()) {
+      // coupling.resolved_plants: the impulse of the fluid's pressure on the plant [N s].
+      info["resolved_plant_load_impulse"] = json(config_.frame.force_to_world(blade_impulse_));
+    }
   }
 
   // The fluid's state through the library, the link's and this process's running totals. The
@@ -222,10 +230,18 @@ class FluidProcess final : public coupler::Solver {
     out.value("fluid_process.initial_momentum", initial_momentum_);
     out.value("fluid_process.budget_sources", budget_sources_);
     out.value("fluid_process.budget_scale", budget_scale_);
+    if (!blade_.empty()) {
+      out.vector("fluid_process.blade_particles", blade_);
+      out.value("fluid_process.blade_impulse", blade_impulse_);
+    }
   }
   void load_checkpoint(const checkpoint::Reader& in) override {
     auto state = mps::load_checkpoint(in);
-    if (state.positions.size() != static_cast<std::size_t>(system_->particle_count())) {
+    // A resolved plant's wall particles follow the scene's (a fresh process has none yet).
+    std::vector<int> blade;
+    if (link_.resolves("vegetation_beam")) blade = in.vector<int>("fluid_process.blade_particles");
+    const std::size_t added = blade_.empty() ? blade.size() : 0;
+    if (state.positions.size() != static_cast<std::size_t>(system_->particle_count()) + added) {
       in.fail("fluid.positions", fmt::format("holds {} particles where this scene has {}",
                                              state.positions.size(), system_->particle_count()));
     }
@@ -247,6 +263,10 @@ class FluidProcess final : public coupler::Solver {
     initial_momentum_ = in.value<Eigen::Vector3d>("fluid_process.initial_momentum");
     budget_sources_ = in.value<Eigen::Vector3d>("fluid_process.budget_sources");
     budget_scale_ = in.value<double>("fluid_process.budget_scale");
+    if (!blade.empty()) {
+      blade_ = std::move(blade);
+      blade_impulse_ = in.value<Eigen::Vector3d>("fluid_process.blade_impulse");
+    }
   }
 
  private:
@@ -278,6 +298,72 @@ class FluidProcess final : public coupler::Solver {
     return system;
   }
 
+  // coupling.resolved_plants: the plant stands in the fluid as one wall particle per node, moved
+  // to the node's exchanged position with its exchanged velocity each window, with thin
+  // partitions along its links (FluidSystem::set_moving_walls). The particles are added to the
+  // fluid the first time the plant is seen (window 0).
+  void place_blade(const coupler::SolidForcing& solid) {
+    const double l0 = config_.parameters.particle_spacing;
+    if (config_.parameters.dimension != 2) {
+      throw std::runtime_error("coupling.resolved_plants needs a 2D fluid_mps");
+    }
+    for (std::size_t k = 0; k + 1 < solid.positions.size(); ++k) {
+      const double length = (solid.positions[k + 1] - solid.positions[k]).norm();
+      // A link much longer than l0 leaves gaps the water flows through (a plant given too few
+      // links, or one torn apart by a diverging coupling).
+      if (length > 1.5 * l0) {
+        throw std::runtime_error(fmt::format(
+            "coupling.resolved_plants: link {} of '{}' is {:.4g} m long, more than 1.5 times the "
+            "fluid's particle_spacing {:.4g} m: its wall particles would let the water through",
+            k + 1, solid.name, length, l0));
+      }
+    }
+    if (blade_.empty()) {
+      mps::MpsState state = system_->save_state();
+      blade_ = mps::append_wall_particles(state, solid.positions);
+      system_ = std::make_unique<mps::FluidSystem>(config_.parameters, state);
+      if (open_boundaries_) {
+        open_boundaries_ = std::make_unique<mps::OpenBoundaries>(*system_, config_.scene.inflow);
+      }
+      spdlog::info("'{}' resolved by {} wall particles", solid.name, blade_.size());
+    }
+    if (blade_.size() != solid.positions.size()) {
+      throw std::runtime_error(fmt::format("'{}' sent {} points where its wall has {}", solid.name,
+                                           solid.positions.size(), blade_.size()));
+    }
+    std::vector<mps::PartitionSegment> segments;
+    for (std::size_t k = 0; k < blade_.size(); ++k) {
+      system_->set_particle(blade_[k], mps::ParticleKind::wall, solid.positions[k],
+                            solid.velocities[k]);
+      if (k > 0) {
+        segments.push_back({solid.positions[k - 1].head<2>(), solid.positions[k].head<2>(), true});
+      }
+    }
+    system_->set_moving_walls(blade_, std::move(segments));
+    blade_window_impulse_.assign(blade_.size(), Eigen::Vector3d::Zero());
+  }
+
+  // The pressure load on each node of the blade [N per m of span] at the end of a fluid step
+  // (mps::plate_pressure_loads at the wall particles' positions), summed over the window's
+  // steps times their length.
+  void add_blade_load(double dt) {
+    std::vector<Eigen::Vector3d> nodes;
+    for (const int i : blade_) nodes.push_back(system_->positions()[i]);
+    const auto loads = mps::plate_pressure_loads(*system_, nodes, config_.sample_radius);
+    for (std::size_t k = 0; k < loads.size(); ++k) blade_window_impulse_[k] += loads[k] * dt;
+  }
+
+  // The mean load of the window on each node [N per m of span]; zero in window 0.
+  std::vector<Eigen::Vector3d> blade_load(const coupler::Window& window) {
+    std::vector<Eigen::Vector3d> load(blade_.size(), Eigen::Vector3d::Zero());
+    if (!(window.dt > 0.0)) return load;
+    for (std::size_t k = 0; k < load.size(); ++k) {
+      load[k] = blade_window_impulse_[k] / window.dt;
+      blade_impulse_ += blade_window_impulse_[k];
+    }
+    return load;
+  }
+
   // All solids' submerged volumes in one set (their points in solid order).
   void set_displaced_volumes(const std::vector<coupler::SolidForcing>& solids) {
     const double ramp = config_.displacement_ramp;
@@ -295,7 +381,10 @@ class FluidProcess final : public coupler::Solver {
   // this window by the link) acts in every fluid step of the window.
   int step_window(const coupler::Window& window, const std::vector<coupler::SolidForcing>& solids) {
     std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> forces;
-    for (const auto& solid : solids) forces.emplace_back(solid.positions, solid.reaction);
+    for (const auto& solid : solids) {
+      // A resolved plant acts through its wall particles; it reports no drag to react to.
+      if (!link_.resolves(solid.name)) forces.emplace_back(solid.positions, solid.reaction);
+    }
     const auto delivery = system_->set_point_forces(forces, config_.sample_radius);
     if (config_.displacement_radius > 0.0) set_displaced_volumes(solids);
     undelivered_ += delivery.undelivered_force * window.dt;
@@ -303,6 +392,7 @@ class FluidProcess final : public coupler::Solver {
         std::max(1, static_cast<int>(std::ceil(window.dt / system_->stable_dt() - 1e-9)));
     for (int piece = 0; piece < pieces; ++piece) {
       const auto step = system_->step(window.dt / pieces);
+      if (!blade_.empty()) add_blade_load(window.dt / pieces);
       largest_solid_fraction_ =
           std::max(largest_solid_fraction_, system_->largest_solid_fraction());
       impulses_.solids += step.external_impulse;
@@ -349,6 +439,9 @@ class FluidProcess final : public coupler::Solver {
   Eigen::Vector3d budget_sources_ = Eigen::Vector3d::Zero();
   double budget_scale_ = 0.0;
   std::vector<double> water_, surface_;
+  std::vector<int> blade_;  // coupling.resolved_plants: the plant's wall particles, node order
+  std::vector<Eigen::Vector3d> blade_window_impulse_;  // this window's, per node [N s/m]
+  Eigen::Vector3d blade_impulse_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace

@@ -98,6 +98,11 @@ CouplingSettings parse_coupling(Section coupling) {
     Section implicit = coupling.optional_child("implicit");
     read_parameters(implicit, settings.implicit);
   }
+  read_parameters(coupling, settings.interface);
+  if (settings.interface.resolved_plants && settings.scheme == "parallel-implicit") {
+    coupling.fail("resolved_plants",
+                  "is not iterated in the parallel-implicit scheme: use serial-implicit");
+  }
   settings.window = coupling.number("window", Range::positive());
   settings.adaptive_window = coupling.flag("adaptive_window", settings.adaptive_window);
   // Solids hold the flow's fields over a window (and the flow the solids'); the key used to
@@ -190,6 +195,16 @@ Scene parse_scene(const YAML::Node& document, const std::filesystem::path& file,
         participants.fail(scene.participants[j].name, "two participants would both act as '" +
                                                           scene.participants[j].acts_as + "'");
       }
+    }
+  }
+  if (scene.coupling.interface.resolved_plants) {
+    const bool fluid = std::any_of(scene.participants.begin(), scene.participants.end(),
+                                   [](const auto& e) { return e.acts_as == "fluid_mps"; });
+    const bool plants = std::any_of(scene.participants.begin(), scene.participants.end(),
+                                    [](const auto& e) { return e.acts_as == "vegetation_beam"; });
+    if (!fluid || !plants) {
+      root.child("coupling")
+          .fail("resolved_plants", "needs fluid_mps and vegetation_beam among the participants");
     }
   }
   if (scene.coupling.adaptive_window && flows == 0) {

@@ -183,6 +183,8 @@ const std::vector<Participant>& participants() {
          return std::vector<Group>{
              group<scenario::RunSettings>("RunSettings",
                                           "scenario/include/cosim/scenario/scene.hpp", ""),
+             group<scenario::InterfaceSettings>(
+                 "InterfaceSettings", "scenario/include/cosim/scenario/scene.hpp", "coupling."),
              group<scenario::ImplicitSettings>(
                  "ImplicitSettings (read with coupling.scheme serial-implicit or "
                  "parallel-implicit)",

@@ -132,8 +132,11 @@ class VegetationProcess final : public coupler::Solver {
         writer_(context.output_dir() / "plants", "vegetation_beam"),
         probe_(config_.elastica_reference ? config_.elastica_reference->plant : 0),
         amplitude_(config_.canopy ? field_.plant_count() : 0),
-        water_(node_count_, 1.0) {
+        water_(node_count_, 1.0),
+        held_forces_(field_.external_forces()),
+        resolved_(context.scene.coupling.interface.resolved_plants) {
     context.declare_frame(3, 0.0, config_.parameters.gravity);
+    if (resolved_) spdlog::info("resolved in the fluid: drag and added mass are the fluid's load");
     modes_ = vegetation::modal_frequencies(field_, config_.checks.modes);
     if (!modes_.empty()) vegetation::write_modes(context.output_dir() / "modes.csv", modes_);
     spdlog::info("{} plants, {} nodes, stable sub-step {:.3g} s", field_.plant_count(), node_count_,
@@ -176,6 +179,7 @@ class VegetationProcess final : public coupler::Solver {
       water_[k] = 0.5 * (begin.water_fraction[k] + end.water_fraction[k]);
     }
     field_.set_water_fraction(water_);
+    if (resolved_) apply_fluid_load(window, end.fluid_load);
     const auto step = field_.advance(window.dt, begin.velocity, end.velocity);
     node_substeps_ += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count_);
     most_substeps_ = std::max(most_substeps_, step.substeps);
@@ -217,6 +221,10 @@ class VegetationProcess final : public coupler::Solver {
     info["last_window_drag_impulse"] = {last_drag_impulse_.x(), last_drag_impulse_.y(),
                                         last_drag_impulse_.z()};
     info["elastic_energy"] = field_.elastic_energy();
+    if (resolved_) {
+      info["fluid_load_impulse"] = {fluid_load_impulse_.x(), fluid_load_impulse_.y(),
+                                    fluid_load_impulse_.z()};
+    }
   }
 
   // The plants through the library, and this process's tip series and totals. The honami
@@ -233,6 +241,7 @@ class VegetationProcess final : public coupler::Solver {
     out.bytes("vegetation_process.counts", counts, sizeof(int), 4);
     out.value("vegetation_process.drag_impulse", drag_impulse_);
     out.value("vegetation_process.last_drag_impulse", last_drag_impulse_);
+    if (resolved_) out.value("vegetation_process.fluid_load_impulse", fluid_load_impulse_);
   }
   void load_checkpoint(const checkpoint::Reader& in) override {
     vegetation::load_checkpoint(field_, in);
@@ -250,12 +259,31 @@ class VegetationProcess final : public coupler::Solver {
     cutbacks_ = counts[3];
     drag_impulse_ = in.value<Eigen::Vector3d>("vegetation_process.drag_impulse");
     last_drag_impulse_ = in.value<Eigen::Vector3d>("vegetation_process.last_drag_impulse");
+    if (resolved_) {
+      fluid_load_impulse_ = in.value<Eigen::Vector3d>("vegetation_process.fluid_load_impulse");
+    }
   }
 
  private:
   static vegetation::VegetationConfig parse(coupler::ProcessContext& context) {
     auto section = context.section();
     return vegetation::parse_config(section, context.scene);
+  }
+
+  // coupling.resolved_plants: the fluid's pressure force on the nodes over this window, held
+  // constant through the window's sub-steps, on top of the scene's own loads.
+  void apply_fluid_load(const coupler::Window& window, const std::vector<Eigen::Vector3d>& load) {
+    std::vector<Eigen::Vector3d> forces = held_forces_;
+    for (std::size_t k = 0; k < node_count_; ++k) {
+      if (!load[k].allFinite()) {
+        throw vegetation::StabilityError(fmt::format(
+            "vegetation_beam: node {}: the fluid load from the fluid is not finite in window {}", k,
+            window.index));
+      }
+      forces[k] += load[k];
+      fluid_load_impulse_ += load[k] * window.dt;
+    }
+    field_.set_external_forces(std::move(forces));
   }
 
   void record_tip() {
@@ -319,6 +347,9 @@ class VegetationProcess final : public coupler::Solver {
   int most_substeps_ = 0, most_newton_iterations_ = 0, newton_restarts_ = 0, cutbacks_ = 0;
   Eigen::Vector3d drag_impulse_ = Eigen::Vector3d::Zero(),
                   last_drag_impulse_ = Eigen::Vector3d::Zero();
+  const std::vector<Eigen::Vector3d> held_forces_;  // the scene's loads after the start
+  const bool resolved_;
+  Eigen::Vector3d fluid_load_impulse_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace

@@ -45,6 +45,15 @@ VegetationConfig parse_config(scenario::Section& section, const scenario::Scene&
   for (auto& group : section.list("plants"))
     parse_plant_group(group, parameters, config.plants, config.checks, memory);
   if (config.plants.empty()) section.fail("plants", "needs at least one plant");
+  if (scene.coupling.interface.resolved_plants) {
+    // The fluid's wall particles follow one chain of nodes.
+    if (config.plants.size() != 1) {
+      section.fail("plants", "coupling.resolved_plants takes one plant");
+    }
+    // The fluid carries the drag and the added mass through its pressure on the plant.
+    parameters.drag_coefficient = 0.0;
+    parameters.added_mass_coefficient = 0.0;
+  }
   parse_section_checks(section, config.plants, config.checks);
 
   config.output_interval =

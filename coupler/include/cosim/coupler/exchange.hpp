@@ -31,7 +31,9 @@ inline constexpr const char* kDrag = "drag";
 // Volume [m^3] of water each solid point displaces. Sent by the solids that displace water:
 // debris; plants are thin stems whose volume the flows leave out.
 inline constexpr const char* kVolumes = "volumes";
-inline bool displaces_water(const std::string& solid) { return solid == "debris_dem"; }
+inline bool displaces_water(const std::string& solid) {
+  return solid == "debris_dem";
+}
 
 inline std::string ambient_velocity_field(const std::string& solid) {
   return "ambient_velocity@" + solid;
@@ -41,6 +43,17 @@ inline std::string water_fraction_field(const std::string& solid) {
 }
 inline std::string surface_field(const std::string& solid) {
   return "surface_elevation@" + solid;
+}
+
+// coupling.resolved_plants (scenario::InterfaceSettings): the flow also publishes
+// "fluid_load@S" (3 per node, world [N]): the mean force its pressure exerted over the window on
+// the wall particles that stand for S's nodes. The solid takes it as its fluid load and reports
+// no drag (the flow already felt the solid through those particles: no reaction to apply).
+inline std::string fluid_load_field(const std::string& solid) {
+  return "fluid_load@" + solid;
+}
+inline bool resolved_by_flow(bool resolved_plants, const std::string& solid) {
+  return resolved_plants && solid == "vegetation_beam";
 }
 
 // Window of the solids' data the flow uses in window `flow_window`.

@@ -25,6 +25,9 @@ struct AmbientFlow {
   // World z of the free surface above each point; -inf: no water above; NaN: the flow does not
   // know (use water_fraction).
   std::vector<double> surface_elevation;
+  // coupling.resolved_plants: the flow's pressure force on each node over the window, world [N]
+  // (empty otherwise).
+  std::vector<Eigen::Vector3d> fluid_load;
 };
 
 class SolidLink {
@@ -48,6 +51,7 @@ class SolidLink {
   std::string flow_name_;  // empty: no flow provider
   bool serial_ = true;
   bool implicit_ = false;
+  bool resolved_ = false;  // exchange::resolved_by_flow: the flow sends a fluid load
   std::size_t point_count_;
   std::map<std::tuple<std::string, int64_t, int32_t>, AmbientFlow> cache_;
 };
@@ -88,6 +92,14 @@ class FlowLink {
   void publish_samples(const std::string& solid, std::span<const Eigen::Vector3d> ambient_velocity,
                        std::span<const double> water_fraction,
                        std::span<const double> surface_elevation = {});
+  // coupling.resolved_plants: the flow resolves this solid (wall particles at its points).
+  bool resolves(const std::string& solid) const {
+    return exchange::resolved_by_flow(resolved_plants_, solid);
+  }
+  // The force the flow's pressure exerted on each of the solid's points over the window, in the
+  // flow's coordinates [N; N per metre of span in 2D]; sent as the solid's fluid load in the world
+  // [N] (a 2D flow's wall spans the slice: the force per span times the span).
+  void publish_fluid_load(const std::string& solid, std::span<const Eigen::Vector3d> load);
 
   // World impulse [N s] of every reaction handed to the flow so far, in its plane (the flow
   // applies it over each window: reaction * dt summed), and the part a 2D flow has no place for
@@ -105,6 +117,7 @@ class FlowLink {
   std::vector<std::string> solids_;
   SolverFrame frame_;
   bool implicit_ = false;
+  bool resolved_plants_ = false;
   double previous_dt_ = 0.0;  // window 1 takes the solids' window-0 drag, which is zero
   Eigen::Vector3d booked_impulse_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d out_of_plane_impulse_ = Eigen::Vector3d::Zero();

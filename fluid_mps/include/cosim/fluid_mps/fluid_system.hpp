@@ -150,6 +150,13 @@ class FluidSystem {
   // Velocity of a wall or dummy particle (a moving wall), kept until changed.
   void set_velocity(int i, const Eigen::Vector3d& velocity);
 
+  // A resolved thin solid (moving_walls.cpp): wall particles (kind wall, placed with
+  // set_particle) that stand for a plate of no thickness in a 2D flow, and the thin partitions
+  // along it (keep_walls: fluid-fluid pairs across the plate are cut, its particles seen from both
+  // sides). Replaces the previous set; the scene's own partitions stay. Throws unless they are
+  // wall particles.
+  void set_moving_walls(std::vector<int> particles, std::vector<PartitionSegment> segments);
+
  private:
   struct StepConstants;  // radii, lattice constants and factors of one step (fluid_step.cpp)
 
@@ -199,6 +206,9 @@ class FluidSystem {
   std::vector<Eigen::Vector3d> external_accelerations_;
   std::vector<Eigen::Vector3d> solid_points_;
   std::vector<double> solid_volumes_, solid_fraction_;
+  // set_moving_walls: the scene's own partitions the moving ones are added to.
+  std::vector<PartitionSegment> scene_partitions_;
+  bool scene_partitions_kept_ = false;
   double solid_radius_ = 0.0, largest_solid_fraction_ = 0.0;
   double time_ = 0.0;
   long step_ = 0;
@@ -237,5 +247,20 @@ class FluidSystem {
   SparseRows matrix_, hierarchy_matrix_;
   LatticeSums hierarchy_sums_;
 };
+
+// Pressure load [N per m of span] on each node of a plate of no thickness along the polyline
+// `nodes` (2D, the library's plane): the mean pressure of the fluid particles within `radius` of
+// the node on its minus side minus that on its plus side (each particle's pressure carried
+// hydrostatically to the node's height), times the node's share of the length
+// (half of each adjacent link), along the plate's normal there (moving_walls.cpp). A side without
+// water within the radius counts as p = 0 (the free surface's pressure).
+std::vector<Eigen::Vector3d> plate_pressure_loads(const FluidSystem& system,
+                                                  const std::vector<Eigen::Vector3d>& nodes,
+                                                  double radius);
+
+// Appends wall particles at `positions` (at rest) to a state, for a system built from it that
+// resolves a moving solid (FluidSystem::set_moving_walls); returns their indices.
+std::vector<int> append_wall_particles(MpsState& state,
+                                       const std::vector<Eigen::Vector3d>& positions);
 
 }  // namespace cosim::mps

@@ -87,10 +87,34 @@ void visit_parameters(P& p, V& v) {
     p.filter);
 }
 
+// What crosses the plants' interface (keys directly under `coupling`). By default a plant feels
+// the flow through its own Morison drag and added mass on the relative velocity (the flow's
+// velocity samples) and the flow takes minus that drag. With resolved_plants the 2D fluid stands
+// each plant in the flow as a moving line of wall particles at its nodes: the fluid's pressure on
+// them is the plants' only fluid load (their drag and added mass are off), so the water's inertia
+// reaches the plants through the exchange, as in a partitioned fluid-structure solver with a
+// resolved interface (Causin, Gerbeau & Nobile 2005, CMAME 194; Hwang et al. 2014, J. Fluids
+// Struct.).
+struct InterfaceSettings {
+  bool resolved_plants = false;
+};
+
+template <class P, class V>
+requires std::same_as<std::remove_const_t<P>, InterfaceSettings>
+void visit_parameters(P& p, V& v) {
+  v(Key("resolved_plants")
+        .doc("fluid_mps (2D) represents the vegetation_beam plant as a moving line of wall "
+             "particles at its nodes and sends its pressure force per node as the plant's fluid "
+             "load; the plant's drag and added mass are off (one plant, serial or "
+             "parallel-explicit or serial-implicit)"),
+    p.resolved_plants);
+}
+
 struct CouplingSettings {
   // serial-explicit, parallel-explicit, serial-implicit, parallel-implicit
   std::string scheme = "serial-explicit";
   ImplicitSettings implicit;
+  InterfaceSettings interface;
   bool is_implicit() const { return scheme.ends_with("-implicit"); }
   bool is_serial() const { return scheme.starts_with("serial-"); }
   double window = 1e-3;           // fixed window length [s]

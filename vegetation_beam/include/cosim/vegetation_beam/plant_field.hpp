@@ -220,6 +220,7 @@ class PlantField {
 
   // Constant extra force per node (all nodes; base entries are ignored), e.g. a tip load.
   void set_external_forces(std::vector<Eigen::Vector3d> forces);
+  const std::vector<Eigen::Vector3d>& external_forces() const { return external_forces_; }
   // Per node, the submerged share in [0, 1] (from the fluid's samples): drag and buoyancy act
   // on that share; the default is fully submerged. Added mass is kept (it sets the step).
   void set_water_fraction(const std::vector<double>& fraction);
