@@ -42,6 +42,9 @@ constexpr int kAmgFromUnknowns = 5000;
 // switch point is that extrapolation, not a measurement.
 constexpr int kAmgFromUnknowns3d = 200000;
 
+// y = A x; each row summed in the order of its entries (the bits of the plain loop).
+void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y);
+
 // Solves A x = b from the initial guess in x. Stops when |r| <= tolerance |b|. The Krylov loop is
 // our own, parallel, with dot products summed in fixed blocks, so the result is identical for
 // any thread count (the AMG cycle and incomplete Cholesky run on one thread).
