@@ -45,7 +45,7 @@ BENCHMARK(BM_DamBreakStep)
     ->UseRealTime();
 // Sizes around the 2D switch point of the automatic preconditioner (kAmgFromUnknowns).
 BENCHMARK(BM_DamBreakStep)
-    ->ArgsProduct({{24, 28, 32, 36}, {0, 1}})
+    ->ArgsProduct({{24, 28, 32, 36, 48, 56, 64}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(200)
     ->UseRealTime();
