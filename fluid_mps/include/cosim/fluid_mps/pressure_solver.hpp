@@ -53,9 +53,10 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
                     Preconditioner preconditioner = Preconditioner::jacobi);
 
 // Work vectors of the conjugate gradients (residual, preconditioned residual, direction,
-// product, per-block partial sums).
+// product, per-block partial sums; the matrix's column indices in 16 bits when they fit).
 struct CgWork {
   std::vector<double> r, z, p, q, partial;
+  std::vector<std::uint16_t> short_column;
 };
 
 // A pressure solver that keeps its work arrays (and the AMG library objects) between solves, so
