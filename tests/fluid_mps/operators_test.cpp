@@ -279,4 +279,3 @@ TEST(MpsPressureSolver, MatrixProductHasTheBitsOfThePlainRowLoop) {
     EXPECT_EQ(product_differing_from_plain_loop(n), 0);
   }
 }
-
