@@ -21,11 +21,12 @@ void BM_DamBreakStep(benchmark::State& state) {
   FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
   // Skip the start-up so the column is collapsing (typical PCG work) when timing begins.
   while (system.time() < 0.05) system.step(system.stable_dt());
-  long pcg_iterations = 0, steps = 0, searches = 0;
+  long pcg_iterations = 0, steps = 0, searches = 0, unknowns = 0;
   for (auto _ : state) {
     const StepReport report = system.step(system.stable_dt());
     pcg_iterations += report.pcg_iterations;
     searches += report.neighbour_searches;
+    unknowns += report.pressure_unknowns;
     ++steps;
   }
   state.counters["particles"] = system.particle_count();
@@ -33,11 +34,18 @@ void BM_DamBreakStep(benchmark::State& state) {
       static_cast<double>(system.particle_count()) * steps, benchmark::Counter::kIsRate);
   state.counters["mean_pcg_iterations"] = static_cast<double>(pcg_iterations) / steps;
   state.counters["searches_per_step"] = static_cast<double>(searches) / steps;
+  state.counters["mean_unknowns"] = static_cast<double>(unknowns) / steps;
 }
 
 // Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi, 2 incomplete Cholesky, 3 automatic).
 BENCHMARK(BM_DamBreakStep)
     ->ArgsProduct({{10, 20, 40, 80}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(200)
+    ->UseRealTime();
+// Sizes around the 2D switch point of the automatic preconditioner (kAmgFromUnknowns).
+BENCHMARK(BM_DamBreakStep)
+    ->ArgsProduct({{24, 28, 32, 36, 48, 56, 64}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(200)
     ->UseRealTime();
@@ -59,11 +67,12 @@ void BM_Column3dStep(benchmark::State& state) {
   }
   FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
   while (system.time() < 0.03) system.step(system.stable_dt());
-  long pcg_iterations = 0, steps = 0, searches = 0;
+  long pcg_iterations = 0, steps = 0, searches = 0, unknowns = 0;
   for (auto _ : state) {
     const StepReport report = system.step(system.stable_dt());
     pcg_iterations += report.pcg_iterations;
     searches += report.neighbour_searches;
+    unknowns += report.pressure_unknowns;
     ++steps;
   }
   state.counters["particles"] = system.particle_count();
@@ -71,6 +80,7 @@ void BM_Column3dStep(benchmark::State& state) {
       static_cast<double>(system.particle_count()) * steps, benchmark::Counter::kIsRate);
   state.counters["mean_pcg_iterations"] = static_cast<double>(pcg_iterations) / steps;
   state.counters["searches_per_step"] = static_cast<double>(searches) / steps;
+  state.counters["mean_unknowns"] = static_cast<double>(unknowns) / steps;
 }
 
 // Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi).

@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
@@ -108,24 +111,48 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
   ++report.neighbour_searches;
 }
 
+// Branch-free: every listed partner is written to the next slot (slots [offset[i], k] are row
+// i's own), the slot kept only if in reach, with r^2; then the square roots of the kept ones in
+// a second pass, two at a time. Both passes give the bits of the plain loop (the same r^2
+// expression, and a square root is correctly rounded either way).
 void FluidSystem::find_near_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2,
                                 bool tail) {
   const PeriodicBoundary& periodic = parameters_.periodic;
   const Eigen::Vector3d xi = x[i];
-  std::int64_t slot = neighbours_.offset[i];
-  for (std::int64_t k = neighbours_.offset[i]; k < neighbours_.offset[i + 1]; ++k) {
-    const int j = neighbours_.index[k];
-    const double r2 = periodic.wrap(x[j] - xi).squaredNorm();
-    if (r2 > cutoff2) continue;
-    near_.index[slot] = j;
-    near_.distance[slot] = std::sqrt(r2);
-    ++slot;
+  const std::int64_t begin = neighbours_.offset[i], end = neighbours_.offset[i + 1];
+  const int* listed = neighbours_.index.data();
+  int* index = near_.index.data();
+  double* distance = near_.distance.data();
+  std::int64_t slot = begin;
+  if (periodic.enabled) {
+    for (std::int64_t k = begin; k < end; ++k) {
+      const int j = listed[k];
+      const double r2 = periodic.wrap(x[j] - xi).squaredNorm();
+      index[slot] = j;
+      distance[slot] = r2;
+      slot += static_cast<std::int64_t>(r2 <= cutoff2);
+    }
+  } else {
+    for (std::int64_t k = begin; k < end; ++k) {
+      const int j = listed[k];
+      const double r2 = (x[j] - xi).squaredNorm();
+      index[slot] = j;
+      distance[slot] = r2;
+      slot += static_cast<std::int64_t>(r2 <= cutoff2);
+    }
   }
+  std::int64_t k = begin;
+#ifdef __SSE2__
+  for (; k + 2 <= slot; k += 2) {
+    _mm_storeu_pd(distance + k, _mm_sqrt_pd(_mm_loadu_pd(distance + k)));
+  }
+#endif
+  for (; k < slot; ++k) distance[k] = std::sqrt(distance[k]);
   near_end_[i] = slot;
   if (!tail) return;
-  for (; slot < neighbours_.offset[i + 1]; ++slot) {
-    near_.index[slot] = i;
-    near_.distance[slot] = std::numeric_limits<double>::infinity();
+  for (; slot < end; ++slot) {
+    index[slot] = i;
+    distance[slot] = std::numeric_limits<double>::infinity();
   }
 }
 

@@ -101,7 +101,7 @@ struct MpsParameters {
   // Preconditioner of the pressure conjugate gradients (pressure_solver.hpp): amg keeps the
   // iterations about constant as the resolution grows (12-13 per step from a/l0 = 10 to 80 on
   // the dam break, against 30-200 with jacobi) but costs a hierarchy set-up every step, which
-  // only pays from about 5000 unknowns on in 2D; automatic takes jacobi below that and amg
+  // only pays from about 4500 unknowns on in 2D; automatic takes jacobi below that and amg
   // above (3D: from 200 000 unknowns, pressure_solver.hpp).
   enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic };
   PressurePreconditioner pressure_preconditioner = PressurePreconditioner::automatic;

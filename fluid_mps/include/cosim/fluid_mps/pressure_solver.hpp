@@ -32,15 +32,19 @@ struct PcgResult {
 // system alone, so runs and restarts stay bit-identical).
 enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic };
 
-// Measured crossover of one-thread step cost on the 2D dam break (docs/performance.md): amg
-// 2.5 / 7.3 / 23.9 ms against jacobi 1.7 / 5.3 / 23.3 ms at 0.8 / 2.0 / 5.5 k particles, and
-// 1.6 times faster than jacobi at 17 k.
-constexpr int kAmgFromUnknowns = 5000;
+// Measured crossover of one-thread step cost on the 2D dam break (BM_DamBreakStep, CPU time,
+// alternating runs; docs/performance.md), with the interleaved CG product: Jacobi / AMG step time
+// 0.64-1.15 (mean 0.92) at 3 800 unknowns (a/l0 = 40), 1.04-1.08 at 5 300 (48), 1.41 at 7 100
+// (56) and 1.13 at 9 100 (64); below 3 800 Jacobi wins. The ratio crosses 1 near 4 600.
+constexpr int kAmgFromUnknowns = 4500;
 // 3D (radius 3.1 l0): Jacobi was 1.2 times faster than AMG at every size measured (9.7 k to
 // 37.6 k particles), its iterations growing as N^(1/3) (33 to 58); at that rate they reach
 // about 120 near 300 k unknowns, where the AMG step (9-10 iterations) is expected to win. The
 // switch point is that extrapolation, not a measurement.
 constexpr int kAmgFromUnknowns3d = 200000;
+
+// y = A x; each row summed in the order of its entries (the bits of the plain loop).
+void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y);
 
 // Solves A x = b from the initial guess in x. Stops when |r| <= tolerance |b|. The Krylov loop is
 // our own, parallel, with dot products summed in fixed blocks, so the result is identical for
@@ -50,9 +54,10 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
                     Preconditioner preconditioner = Preconditioner::jacobi);
 
 // Work vectors of the conjugate gradients (residual, preconditioned residual, direction,
-// product, per-block partial sums).
+// product, per-block partial sums; the matrix's column indices in 16 bits when they fit).
 struct CgWork {
   std::vector<double> r, z, p, q, partial;
+  std::vector<std::uint16_t> short_column;
 };
 
 // A pressure solver that keeps its work arrays (and the AMG library objects) between solves, so
