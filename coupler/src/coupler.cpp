@@ -18,7 +18,6 @@ namespace {
 using cosim_msgs::status_t;
 using cosim_msgs::window_t;
 
-
 std::vector<std::pair<std::string, std::string>> names_of(const scenario::Scene& scene) {
   std::vector<std::pair<std::string, std::string>> names;
   for (const auto& entry : scene.participants) names.emplace_back(entry.acts_as, entry.name);
@@ -109,8 +108,8 @@ void Coupler::collect(ProcessGroup& processes, const Collection& collection) {
     }
     for (const auto& exit : processes.poll_exits()) {
       if (exit.interrupted && collection.on_interrupt) collection.on_interrupt();
-      throw Failure(
-          fmt::format("{} during {} (see logs/{}.log)", exit.describe(), collection.during, exit.name));
+      throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(),
+                                collection.during, exit.name));
     }
     check_silence(pending, collection.during);
     if (collection.check) collection.check(pending, seconds_since(start));

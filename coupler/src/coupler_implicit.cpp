@@ -27,7 +27,6 @@ namespace {
 using cosim_msgs::status_t;
 using cosim_msgs::window_t;
 
-
 AccelerationOptions acceleration_options(const scenario::ImplicitSettings& settings) {
   AccelerationOptions options;
   switch (settings.acceleration) {

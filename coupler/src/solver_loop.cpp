@@ -74,10 +74,11 @@ void write_checkpoint(ProcessContext& context, const Solver& solver, const Outpu
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   spdlog::info("checkpoint after window {}: {} ({} bytes, {:.3f} s)", window.index, file.string(),
                bytes, seconds);
-  participant.checkpointed(nlohmann::json{
-      {"file", file.filename().string()}, {"bytes", bytes}, {"write_seconds", seconds}}
-                               .dump(),
-                           window.index);
+  participant.checkpointed(
+      nlohmann::json{
+          {"file", file.filename().string()}, {"bytes", bytes}, {"write_seconds", seconds}}
+          .dump(),
+      window.index);
 }
 
 Restored read_checkpoint(ProcessContext& context, Solver& solver, OutputClock& clock) {

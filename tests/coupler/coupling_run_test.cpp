@@ -231,7 +231,9 @@ struct AdaptiveOutcome {
   int grants_missed = 0;          // windows in which the flow's grant of k + 1 never came
 };
 
-double flow_stable_dt(int64_t window) { return 1e-3 / (1.0 + 0.05 * static_cast<double>(window)); }
+double flow_stable_dt(int64_t window) {
+  return 1e-3 / (1.0 + 0.05 * static_cast<double>(window));
+}
 
 AdaptiveOutcome run_adaptive(int64_t run_id, bool flow_limits) {
   scenario::Scene scene = make_scene(20);
@@ -258,10 +260,10 @@ AdaptiveOutcome run_adaptive(int64_t run_id, bool flow_limits) {
         }
         flow_granted = window.index;
         for (const auto& solid : link.receive_solids(window)) {
-          link.publish_samples(solid.name,
-                               std::vector<Eigen::Vector3d>(solid.positions.size(),
-                                                            Eigen::Vector3d(0.1, 0.0, 0.0)),
-                               std::vector<double>(solid.positions.size(), 1.0));
+          link.publish_samples(
+              solid.name,
+              std::vector<Eigen::Vector3d>(solid.positions.size(), Eigen::Vector3d(0.1, 0.0, 0.0)),
+              std::vector<double>(solid.positions.size(), 1.0));
         }
         participant.done(1, flow_stable_dt(window.index));
       }

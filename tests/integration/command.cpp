@@ -36,9 +36,10 @@ CommandResult run_cosim(const std::string& arguments, int time_limit_seconds) {
 }
 
 CommandResult interrupt_cosim(const std::string& arguments, int seconds, int time_limit_seconds) {
-  return run_command(fmt::format("sh -c '{}/cosim {} & pid=$!; sleep {}; kill -INT $pid; wait $pid'",
-                                 COSIM_BIN_DIR, arguments, seconds),
-                     time_limit_seconds);
+  return run_command(
+      fmt::format("sh -c '{}/cosim {} & pid=$!; sleep {}; kill -INT $pid; wait $pid'",
+                  COSIM_BIN_DIR, arguments, seconds),
+      time_limit_seconds);
 }
 
 std::filesystem::path run_folder_of(const CommandResult& result) {

@@ -198,8 +198,8 @@ int report_replay(const ReplayRequest& request, const scenario::ParticipantEntry
       driven.acts_as, request.recorded_run.string(), extent, windows.size(), iterations, fields,
       output_files);
   for (std::size_t i = 0; i < mismatches.size() && i < 10; ++i) {
-    fmt::print("  {} field '{}': {}\n", replay::describe(mismatches[i].window),
-               mismatches[i].field, mismatches[i].problem);
+    fmt::print("  {} field '{}': {}\n", replay::describe(mismatches[i].window), mismatches[i].field,
+               mismatches[i].problem);
   }
   for (const auto& problem : output_problems) fmt::print("  output {}\n", problem);
   if (fields == 0) {

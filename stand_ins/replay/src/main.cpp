@@ -40,7 +40,8 @@ class ReplayProcess final : public coupler::Solver {
         const auto next = recording_.windows.lower_bound({window.index + 1, 0});
         const auto last = next == recording_.windows.begin() ? next : std::prev(next);
         if (window.iteration > 0 && last != next && last->first.window == window.index) {
-          held += fmt::format("; window {} iterations 0 to {}", window.index, last->first.iteration);
+          held +=
+              fmt::format("; window {} iterations 0 to {}", window.index, last->first.iteration);
         }
       }
       throw std::runtime_error(fmt::format("{}: {} of '{}' is not in the recording ({})",

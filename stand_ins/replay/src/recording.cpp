@@ -133,10 +133,10 @@ Recording read_recording(const std::filesystem::path& event_log, const std::stri
   });
   for (auto& [key, assembly] : assemblies) {
     if (assembly.received_count != static_cast<int32_t>(assembly.received.size())) {
-      throw std::runtime_error(fmt::format(
-          "{}: field '{}' of '{}' in {} is incomplete in the log ({} of {} chunks)",
-          event_log.string(), key.second, participant, describe(key.first), assembly.received_count,
-          assembly.received.size()));
+      throw std::runtime_error(
+          fmt::format("{}: field '{}' of '{}' in {} is incomplete in the log ({} of {} chunks)",
+                      event_log.string(), key.second, participant, describe(key.first),
+                      assembly.received_count, assembly.received.size()));
     }
     recording.windows[key.first].fields[key.second] = std::move(assembly.values);
   }
