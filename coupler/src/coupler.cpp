@@ -194,6 +194,116 @@ void Coupler::book_report(const status_t& status, bool new_window,
   }
 }
 
+double Coupler::start_plan() {
+  // A restart's first window is the checkpoint's window N again (dt 0: its fields published
+  // again), and window N + 1 starts where the checkpoint stands. Window 0 exchanges initial
+  // states.
+  const int64_t first = options_.restart ? options_.restart->window : 0;
+  plan_.assign(static_cast<std::size_t>(first) + 1, {0.0, 0.0});
+  if (!options_.restart) return 0.0;
+  plan_[first] = {options_.restart->time, 0.0};
+  return options_.restart->time;
+}
+
+bool Coupler::plan_next_window(double& next_time, const std::map<int64_t, double>& stable_dt,
+                               RunResult& result) {
+  const bool adaptive = scene_.coupling.adaptive_window;
+  const auto index = static_cast<int64_t>(plan_.size());
+  double dt = scene_.coupling.window;
+  if (adaptive) {
+    if (const auto found = stable_dt.find(index - 1); found != stable_dt.end()) {
+      dt = std::min(dt, found->second);
+    }
+  }
+  // Land on the scene's duration; a remainder within round-off of the window is the window
+  // (the window length, not a value 1e-19 shorter, is what the solvers were given before).
+  const double remaining = scene_.duration - next_time;
+  if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
+  if (dt <= scene_.duration * 1e-12) return false;
+  plan_.emplace_back(next_time, dt);
+  // Fixed windows: no round-off drift over long runs.
+  next_time = adaptive
+                  ? next_time + dt
+                  : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
+  book_.plan(index, plan_.back().first, next_time);
+  // Adaptive windows may need more than the nominal count.
+  result.total_windows = std::max(result.total_windows, index);
+  return true;
+}
+
+void Coupler::book_overhead(RunResult& result, Clock::time_point windows_started, int64_t completed,
+                            bool serial) const {
+  const double windows_wall =
+      windows_started == Clock::time_point{} ? 0.0 : seconds_since(windows_started);
+  double physics_sum = 0.0;
+  double physics_max = 0.0;
+  for (const auto& name : names_) {
+    physics_sum += reports_.at(name).physics_seconds;
+    physics_max = std::max(physics_max, reports_.at(name).physics_seconds);
+  }
+  result.windows_wall_seconds = windows_wall;
+  result.critical_physics_seconds = serial ? physics_sum : physics_max;
+  result.overhead_seconds = std::max(0.0, windows_wall - result.critical_physics_seconds);
+  result.overhead_fraction = windows_wall > 0.0 ? result.overhead_seconds / windows_wall : 0.0;
+  result.overhead_ms_per_window =
+      completed >= 1 ? 1e3 * result.overhead_seconds / static_cast<double>(completed) : 0.0;
+}
+
+bool Coupler::take_reports(Progress& progress) {
+  bool progressed = false;
+  auto& statuses = bus_->statuses();
+  while (!statuses.empty()) {
+    status_t status = std::move(statuses.front());
+    statuses.pop_front();
+    const std::string sender = status.header.sender;
+    if (status.state == status_t::STATE_FAILED) {
+      throw Failure(fmt::format("'{}' failed in {}: {}", sender, window_text(status.header.window),
+                                status.message));
+    }
+    if (status.state == status_t::STATE_CHECKPOINTED) {
+      book_.answer(status);
+      continue;
+    }
+    const auto done = progress.done.find(sender);
+    if (status.state != status_t::STATE_DONE || done == progress.done.end()) continue;
+    if (status.header.window <= done->second) continue;
+    auto& queue = progress.early[sender];
+    queue.emplace(status.header.window, std::move(status));
+    while (!queue.empty() && queue.begin()->first == done->second + 1) {
+      book_report(queue.begin()->second, true, progress.stable_dt);
+      done->second = queue.begin()->first;
+      queue.erase(queue.begin());
+      progressed = true;
+    }
+  }
+  return progressed;
+}
+
+void Coupler::stop_on_exit(ProcessGroup& processes, const ChildExit& exit, Progress& progress,
+                           int64_t first, RunResult& result) {
+  // Its last reports may still be on their way (on a loaded machine LCM's receive thread can lag
+  // the exit by tens of ms): take them until the bus has been quiet for 50 ms, at most 0.5 s,
+  // before naming its window.
+  const auto drain_start = Clock::now();
+  while (bus_->poll(0.05) && seconds_since(drain_start) < 0.5) take_reports(progress);
+  take_reports(progress);
+  std::string acts_as = exit.name;
+  for (const auto& entry : scene_.participants) {
+    if (entry.name == exit.name) acts_as = entry.acts_as;
+  }
+  const auto done = progress.done.find(acts_as);
+  const int64_t window = done != progress.done.end() ? done->second + 1 : progress.completed + 1;
+  if (exit.interrupted && progress.granted > first) {
+    // Stopped from outside: save the state after the last window granted (no participant is
+    // past it) before the run ends.
+    book_.request(progress.granted, end_of(progress.granted));
+    await_checkpoints(processes, progress.granted, true);
+    if (book_.complete(progress.granted)) result.windows_completed = progress.granted;
+  }
+  throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(), window_text(window),
+                            exit.name));
+}
+
 double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   // The coupler grants a few windows ahead and the participants go on as soon as their
   // partners' data is there: the coupler's own round trip leaves the critical path. An adaptive
@@ -203,173 +313,78 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
   const bool adaptive = scene_.coupling.adaptive_window;
   const int64_t lookahead = 2;
   const double resend = scene_.coupling.resend_interval;
-  plan_.assign(1, {0.0, 0.0});  // window 0 exchanges initial states
-  double next_time = 0.0;
-  // A restart's first window is the checkpoint's window N again (dt 0: its fields published
-  // again), and window N + 1 starts where the checkpoint stands.
-  const int64_t first = options_.restart ? options_.restart->window : 0;
-  if (options_.restart) {
-    plan_.assign(static_cast<std::size_t>(first) + 1, {0.0, 0.0});
-    plan_[first] = {options_.restart->time, 0.0};
-    next_time = options_.restart->time;
-  }
+  double next_time = start_plan();
+  const int64_t first = static_cast<int64_t>(plan_.size()) - 1;
   bool plan_complete = false;
-  std::map<int64_t, double> stable_dt;  // smallest stable dt reported per window
-  auto plan_next = [&] {
-    const auto index = static_cast<int64_t>(plan_.size());
-    double dt = scene_.coupling.window;
-    if (adaptive) {
-      if (const auto found = stable_dt.find(index - 1); found != stable_dt.end()) {
-        dt = std::min(dt, found->second);
-      }
-    }
-    // Land on the scene's duration; a remainder within round-off of the window is the window
-    // (the window length, not a value 1e-19 shorter, is what the solvers were given before).
-    const double remaining = scene_.duration - next_time;
-    if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
-    if (dt <= scene_.duration * 1e-12) {
-      plan_complete = true;
-      return;
-    }
-    plan_.emplace_back(next_time, dt);
-    // Fixed windows: no round-off drift over long runs.
-    next_time =
-        adaptive ? next_time + dt
-                 : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
-    book_.plan(index, plan_.back().first, next_time);
-    // Adaptive windows may need more than the nominal count.
-    result.total_windows = std::max(result.total_windows, index);
-  };
-
-  std::map<std::string, int64_t> done;  // highest window each participant finished, in order
-  std::map<std::string, std::map<int64_t, status_t>> early;  // DONEs heard out of order
-  for (const auto& name : names_) done[name] = first - 1;
-  int64_t completed = first - 1;
+  Progress progress;
+  for (const auto& name : names_) progress.done[name] = first - 1;
+  progress.completed = first - 1;
+  progress.granted = first - 1;
   // The last window whose stable dt is known from every limiting participant.
   auto sized_through = [&] {
     int64_t lowest = std::numeric_limits<int64_t>::max();
     for (const auto& name : limiting_) {
-      if (const auto found = done.find(name); found != done.end()) {
+      if (const auto found = progress.done.find(name); found != progress.done.end()) {
         lowest = std::min(lowest, found->second);
       }
     }
     return lowest;
   };
-  int64_t granted = first - 1;
   auto last_broadcast = Clock::now();
   auto last_check = Clock::now();
   Clock::time_point window_one_started{};
   auto broadcast = [&] {
-    std::vector<std::pair<double, double>> windows(plan_.begin() + (completed + 1),
-                                                   plan_.begin() + (granted + 1));
-    bus_->publish_window(Stamp{completed + 1, windows.front().first, windows.front().second},
-                         window_t::COMMAND_ADVANCE, result.total_windows, "", windows,
-                         book_.pending(granted));
+    std::vector<std::pair<double, double>> windows(plan_.begin() + (progress.completed + 1),
+                                                   plan_.begin() + (progress.granted + 1));
+    bus_->publish_window(
+        Stamp{progress.completed + 1, windows.front().first, windows.front().second},
+        window_t::COMMAND_ADVANCE, result.total_windows, "", windows,
+        book_.pending(progress.granted));
     last_broadcast = Clock::now();
   };
-  auto accept = [&](const status_t& status) { book_report(status, true, stable_dt); };
 
   while (true) {
-    {
-      const int64_t sized = adaptive ? sized_through() : std::numeric_limits<int64_t>::max();
-      while (!plan_complete && static_cast<int64_t>(plan_.size()) <= completed + 2 + lookahead &&
-             static_cast<int64_t>(plan_.size()) - 1 <= sized) {
-        plan_next();
-      }
+    const int64_t sized = adaptive ? sized_through() : std::numeric_limits<int64_t>::max();
+    while (!plan_complete &&
+           static_cast<int64_t>(plan_.size()) <= progress.completed + 2 + lookahead &&
+           static_cast<int64_t>(plan_.size()) - 1 <= sized) {
+      plan_complete = !plan_next_window(next_time, progress.stable_dt, result);
     }
     const int64_t last_planned = static_cast<int64_t>(plan_.size()) - 1;
-    if (plan_complete && completed == last_planned) break;
-    const int64_t target = std::min(completed + 1 + lookahead, last_planned);
-    if (target > granted) {
-      granted = target;
+    if (plan_complete && progress.completed == last_planned) break;
+    const int64_t target = std::min(progress.completed + 1 + lookahead, last_planned);
+    if (target > progress.granted) {
+      progress.granted = target;
       broadcast();
     } else if (seconds_since(last_broadcast) >= resend) {
       broadcast();  // retransmission of the grant, and the coupler's heartbeat
     }
     bus_->poll(std::max(0.0, resend - seconds_since(last_broadcast)));
-    bool progressed = false;
-    auto take_statuses = [&] {
-      auto& statuses = bus_->statuses();
-      while (!statuses.empty()) {
-        status_t status = std::move(statuses.front());
-        statuses.pop_front();
-        const std::string sender = status.header.sender;
-        if (status.state == status_t::STATE_FAILED) {
-          throw Failure(fmt::format("'{}' failed in {}: {}", sender,
-                                    window_text(status.header.window), status.message));
-        }
-        if (status.state == status_t::STATE_CHECKPOINTED) {
-          book_.answer(status);
-          continue;
-        }
-        if (status.state != status_t::STATE_DONE || !done.contains(sender)) continue;
-        if (status.header.window <= done[sender]) continue;
-        early[sender].emplace(status.header.window, std::move(status));
-        auto& queue = early[sender];
-        while (!queue.empty() && queue.begin()->first == done[sender] + 1) {
-          accept(queue.begin()->second);
-          done[sender] = queue.begin()->first;
-          queue.erase(queue.begin());
-          progressed = true;
-        }
-      }
-    };
-    take_statuses();
+    const bool progressed = take_reports(progress);
     if (progressed) {
       int64_t lowest = std::numeric_limits<int64_t>::max();
-      for (const auto& [name, window] : done) lowest = std::min(lowest, window);
-      if (lowest > completed) {
-        if (completed < 0 && lowest >= 0) window_one_started = Clock::now();
-        completed = lowest;
-        if (completed >= 1) result.windows_completed = completed;
+      for (const auto& [name, window] : progress.done) lowest = std::min(lowest, window);
+      if (lowest > progress.completed) {
+        if (progress.completed < 0 && lowest >= 0) window_one_started = Clock::now();
+        progress.completed = lowest;
+        if (progress.completed >= 1) result.windows_completed = progress.completed;
       }
     }
     // Exits and silence are checked every few milliseconds, not after every message.
     if (seconds_since(last_check) >= 0.01 || !progressed) {
       last_check = Clock::now();
       for (const auto& exit : processes.poll_exits()) {
-        // Its last reports may still be on their way (on a loaded machine LCM's receive thread
-        // can lag the exit by tens of ms): take them until the bus has been quiet for 50 ms,
-        // at most 0.5 s, before naming its window.
-        const auto drain_start = Clock::now();
-        while (bus_->poll(0.05) && seconds_since(drain_start) < 0.5) take_statuses();
-        take_statuses();
-        std::string acts_as = exit.name;
-        for (const auto& entry : scene_.participants) {
-          if (entry.name == exit.name) acts_as = entry.acts_as;
-        }
-        const int64_t window = done.contains(acts_as) ? done[acts_as] + 1 : completed + 1;
-        if (exit.interrupted && granted > first) {
-          // Stopped from outside: save the state after the last window granted (no participant
-          // is past it) before the run ends.
-          book_.request(granted, end_of(granted));
-          await_checkpoints(processes, granted, true);
-          if (book_.complete(granted)) result.windows_completed = granted;
-        }
-        throw Failure(fmt::format("{} during {} (see logs/{}.log)", exit.describe(),
-                                  window_text(window), exit.name));
+        stop_on_exit(processes, exit, progress, first, result);
       }
       for (const auto& name : names_) {
-        if (done[name] < granted) check_silence({name}, window_text(done[name] + 1));
+        const int64_t done = progress.done[name];
+        if (done < progress.granted) check_silence({name}, window_text(done + 1));
       }
     }
   }
-  await_checkpoints(processes, granted, false);
-  const double windows_wall =
-      window_one_started == Clock::time_point{} ? 0.0 : seconds_since(window_one_started);
-  double physics_sum = 0.0;
-  double physics_max = 0.0;
-  for (const auto& name : names_) {
-    physics_sum += reports_[name].physics_seconds;
-    physics_max = std::max(physics_max, reports_[name].physics_seconds);
-  }
-  const bool serial = scene_.coupling.scheme == "serial-explicit";
-  result.windows_wall_seconds = windows_wall;
-  result.critical_physics_seconds = serial ? physics_sum : physics_max;
-  result.overhead_seconds = std::max(0.0, windows_wall - result.critical_physics_seconds);
-  result.overhead_fraction = windows_wall > 0.0 ? result.overhead_seconds / windows_wall : 0.0;
-  result.overhead_ms_per_window =
-      completed >= 1 ? 1e3 * result.overhead_seconds / static_cast<double>(completed) : 0.0;
+  await_checkpoints(processes, progress.granted, false);
+  book_overhead(result, window_one_started, progress.completed,
+                scene_.coupling.scheme == "serial-explicit");
   return next_time;
 }
 

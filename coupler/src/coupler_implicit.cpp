@@ -53,7 +53,6 @@ AccelerationOptions acceleration_options(const scenario::ImplicitSettings& setti
 double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result) {
   const auto& settings = scene_.coupling.implicit;
   const bool serial = scene_.coupling.is_serial();
-  const bool adaptive = scene_.coupling.adaptive_window;
   const double resend = scene_.coupling.resend_interval;
   Accelerator accelerator(acceleration_options(settings));
   result.acceleration = acceleration_name(accelerator.options().kind);
@@ -62,13 +61,8 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
   std::vector<std::string> solids;
   for (const auto* solid : scene_.solids()) solids.push_back(solid->acts_as);
 
-  const int64_t first = options_.restart ? options_.restart->window : 0;
-  plan_.assign(static_cast<std::size_t>(first) + 1, {0.0, 0.0});
-  double next_time = 0.0;
-  if (options_.restart) {
-    plan_[first] = {options_.restart->time, 0.0};
-    next_time = options_.restart->time;
-  }
+  double next_time = start_plan();
+  const int64_t first = static_cast<int64_t>(plan_.size()) - 1;
   std::map<int64_t, double> stable_dt;  // smallest stable dt of each window's accepted iteration
   std::map<int64_t, int32_t> accepted{{first - 1, 0}};
   Clock::time_point window_one_started{};
@@ -207,23 +201,9 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
   accepted[first] = 0;
   completed = first;
   window_one_started = Clock::now();
-  while (true) {
-    const auto index = static_cast<int64_t>(plan_.size());
-    double dt = scene_.coupling.window;
-    if (adaptive) {
-      if (const auto found = stable_dt.find(index - 1); found != stable_dt.end()) {
-        dt = std::min(dt, found->second);
-      }
-    }
-    const double remaining = scene_.duration - next_time;
-    if (remaining < dt * (1.0 - 1e-9)) dt = remaining;
-    if (dt <= scene_.duration * 1e-12) break;
-    plan_.emplace_back(next_time, dt);
-    next_time =
-        adaptive ? next_time + dt
-                 : std::min(static_cast<double>(index) * scene_.coupling.window, scene_.duration);
-    book_.plan(index, plan_.back().first, next_time);
-    result.total_windows = std::max(result.total_windows, index);
+  while (plan_next_window(next_time, stable_dt, result)) {
+    const auto index = static_cast<int64_t>(plan_.size()) - 1;
+    const double dt = plan_.back().second;
 
     // The flow's first iteration takes window k-1's drag rescaled to window k's length (the
     // window after window 0 takes none: window 0 has no length).
@@ -273,19 +253,7 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
     bus_->forget_fields_before(index - 2);
   }
   await_checkpoints(processes, completed, false);
-  const double windows_wall = seconds_since(window_one_started);
-  double physics_sum = 0.0;
-  double physics_max = 0.0;
-  for (const auto& name : names_) {
-    physics_sum += reports_[name].physics_seconds;
-    physics_max = std::max(physics_max, reports_[name].physics_seconds);
-  }
-  result.windows_wall_seconds = windows_wall;
-  result.critical_physics_seconds = serial ? physics_sum : physics_max;
-  result.overhead_seconds = std::max(0.0, windows_wall - result.critical_physics_seconds);
-  result.overhead_fraction = windows_wall > 0.0 ? result.overhead_seconds / windows_wall : 0.0;
-  result.overhead_ms_per_window =
-      completed >= 1 ? 1e3 * result.overhead_seconds / static_cast<double>(completed) : 0.0;
+  book_overhead(result, window_one_started, completed, serial);
   return next_time;
 }
 

@@ -3,6 +3,7 @@
 // falls silent. It never does physics: it only orders, waits, records and reports.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -105,6 +106,35 @@ class Coupler {
   // The same for the implicit schemes: one iteration of one window granted at a time, each
   // window iterated until the exchanged fields converge (coupler/src/coupler_implicit.cpp).
   double run_implicit_windows(ProcessGroup& processes, RunResult& result);
+  // Both window loops (coupler.cpp, coupler_implicit.cpp):
+  // plan_ from window 0, or from a restart's window N (its start time), which it returns.
+  double start_plan();
+  // Appends window plan_.size() to plan_, starting at next_time (advanced): the scene's window,
+  // shortened when adaptive to the smallest stable dt reported for the window before, landing on
+  // the duration. False, planning nothing, once the duration is reached.
+  bool plan_next_window(double& next_time, const std::map<int64_t, double>& stable_dt,
+                        RunResult& result);
+  // summary.json's coupling_overhead: the wall time of windows 1..completed (from
+  // `windows_started`) minus the participants' physics (summed along a serial chain).
+  void book_overhead(RunResult& result, std::chrono::steady_clock::time_point windows_started,
+                     int64_t completed, bool serial) const;
+
+  // The explicit window loop's record of the participants' reports.
+  struct Progress {
+    std::map<std::string, int64_t> done;  // highest window each participant finished, in order
+    std::map<std::string, std::map<int64_t, cosim_msgs::status_t>> early;  // heard out of order
+    std::map<int64_t, double> stable_dt;  // smallest stable dt reported per window
+    int64_t completed = -1;               // every participant has finished it
+    int64_t granted = -1;
+  };
+  // Takes every report the bus holds into `progress`; true when some participant finished a
+  // window. A FAILED report stops the run.
+  bool take_reports(Progress& progress);
+  // A participant's process ended: its last reports are taken, an interrupted run saves the
+  // state after the last window granted, and the run stops naming the window.
+  [[noreturn]] void stop_on_exit(ProcessGroup& processes, const ChildExit& exit, Progress& progress,
+                                 int64_t first, RunResult& result);
+
   // A DONE report into reports_ (steps, times; a window when new_window) and the smallest
   // stable dt of its window into stable_dt.
   void book_report(const cosim_msgs::status_t& status, bool new_window,
