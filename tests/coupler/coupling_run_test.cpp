@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <thread>
 
@@ -231,6 +232,22 @@ struct AdaptiveOutcome {
   int grants_missed = 0;          // windows in which the flow's grant of k + 1 never came
 };
 
+// Answers every window with `answer` until the coupler asks for the finish (or aborts the run).
+void serve_windows(Participant& participant, const std::function<void(const Window&)>& answer) {
+  try {
+    while (true) {
+      const auto window = participant.next_window();
+      if (window.finish) {
+        participant.finished("{}");
+        return;
+      }
+      answer(window);
+    }
+  } catch (const CouplingError&) {
+    // the coupler aborted the run
+  }
+}
+
 double flow_stable_dt(int64_t window) {
   return 1e-3 / (1.0 + 0.05 * static_cast<double>(window));
 }
@@ -251,54 +268,37 @@ AdaptiveOutcome run_adaptive(int64_t run_id, bool flow_limits) {
     declaration.limits_window = flow_limits;
     participant.declare(declaration.to_json());
     FlowLink link(participant, scene);
-    try {
-      while (true) {
-        const auto window = participant.next_window();
-        if (window.finish) {
-          participant.finished("{}");
-          return;
-        }
-        flow_granted = window.index;
-        for (const auto& solid : link.receive_solids(window)) {
-          link.publish_samples(
-              solid.name,
-              std::vector<Eigen::Vector3d>(solid.positions.size(), Eigen::Vector3d(0.1, 0.0, 0.0)),
-              std::vector<double>(solid.positions.size(), 1.0));
-        }
-        participant.done(1, flow_stable_dt(window.index));
+    serve_windows(participant, [&](const Window& window) {
+      flow_granted = window.index;
+      for (const auto& solid : link.receive_solids(window)) {
+        link.publish_samples(
+            solid.name,
+            std::vector<Eigen::Vector3d>(solid.positions.size(), Eigen::Vector3d(0.1, 0.0, 0.0)),
+            std::vector<double>(solid.positions.size(), 1.0));
       }
-    } catch (const CouplingError&) {
-      // the coupler aborted the run
-    }
+      participant.done(1, flow_stable_dt(window.index));
+    });
   });
   std::thread solid([&] {
     Participant participant(options("vegetation_beam", run_id, 0.0));
     participant.declare(FrameDeclaration{}.to_json());
     SolidLink link(participant, scene, 2);
     const std::vector<Eigen::Vector3d> positions(2, Eigen::Vector3d::Zero());
-    try {
-      while (true) {
-        const auto window = participant.next_window();
-        if (window.finish) {
-          participant.finished("{}");
-          return;
+    serve_windows(participant, [&](const Window& window) {
+      if (window.index > 0) {
+        link.ambient(window);
+        outcome.solid_dts.push_back(window.dt);
+        const bool last = window.end_time() >= scene.duration * (1.0 - 1e-9);
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+        while (!last && flow_granted < window.index + 1 &&
+               std::chrono::steady_clock::now() < until) {
+          std::this_thread::sleep_for(std::chrono::microseconds(200));
         }
-        if (window.index > 0) {
-          link.ambient(window);
-          outcome.solid_dts.push_back(window.dt);
-          const bool last = window.end_time() >= scene.duration * (1.0 - 1e-9);
-          const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
-          while (!last && flow_granted < window.index + 1 &&
-                 std::chrono::steady_clock::now() < until) {
-            std::this_thread::sleep_for(std::chrono::microseconds(200));
-          }
-          if (!last && flow_granted < window.index + 1) ++outcome.grants_missed;
-        }
-        link.publish_state(positions, positions, positions);
-        participant.done(1);
+        if (!last && flow_granted < window.index + 1) ++outcome.grants_missed;
       }
-    } catch (const CouplingError&) {
-    }
+      link.publish_state(positions, positions, positions);
+      participant.done(1);
+    });
   });
   ProcessGroup none;
   outcome.result = coupler.run(none);
