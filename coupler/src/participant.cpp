@@ -113,13 +113,7 @@ void Participant::take_checkpoint_requests(const cosim_msgs::window_t& message) 
       // Asked again: the answer may have been lost.
       if (message.command == cosim_msgs::window_t::COMMAND_CHECKPOINT &&
           seconds_since(last_checkpoint_answer_) >= options_.resend_interval) {
-        bus_->publish_status(Stamp{window, current_.time, 0.0}, [&] {
-          cosim_msgs::status_t status{};
-          status.state = cosim_msgs::status_t::STATE_CHECKPOINTED;
-          status.message = written->second;
-          status.field_count = 0;
-          return status;
-        }());
+        publish_checkpointed(window, written->second);
         last_checkpoint_answer_ = Clock::now();
       }
       continue;
@@ -137,12 +131,17 @@ void Participant::checkpointed(const std::string& description_json, int64_t wind
   if (window == current_.index) {
     publish_state(cosim_msgs::status_t::STATE_CHECKPOINTED, 0, 0.0, description_json);
   } else {
-    cosim_msgs::status_t status{};
-    status.state = cosim_msgs::status_t::STATE_CHECKPOINTED;
-    status.message = description_json;
-    bus_->publish_status(Stamp{window, current_.time, 0.0}, status);
+    publish_checkpointed(window, description_json);  // of the window before (rolled back)
   }
   last_checkpoint_answer_ = Clock::now();
+}
+
+void Participant::publish_checkpointed(int64_t window, const std::string& description_json) {
+  cosim_msgs::status_t status{};
+  status.state = cosim_msgs::status_t::STATE_CHECKPOINTED;
+  status.message = description_json;
+  status.field_count = 0;
+  bus_->publish_status(Stamp{window, current_.time, 0.0}, status);
 }
 
 void Participant::check_abort() {
@@ -244,6 +243,9 @@ Window Participant::next_window() {
       std::erase_if(granted_, [&](const auto& item) {
         return item.first <= std::pair(next->index, next->iteration);
       });
+      if (options_.rollback && next->index != current_.index) {
+        previous_window_fields_ = std::move(window_fields_);
+      }
       current_ = *next;
       current_done_ = false;
       window_fields_.clear();

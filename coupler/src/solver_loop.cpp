@@ -39,14 +39,14 @@ class OutputClock {
   double last_ = -std::numeric_limits<double>::infinity();
 };
 
+using Fields = std::vector<std::pair<std::string, std::vector<double>>>;
+
 // What the restart window hands out again: the fields of window N and its report.
 struct Restored {
   int64_t window = 0;
   double stable_dt = 0.0;
-  std::vector<std::pair<std::string, std::vector<double>>> fields;
+  Fields fields;
 };
-
-using Fields = std::vector<std::pair<std::string, std::vector<double>>>;
 
 // `fields`: what this participant published in window `window.index` (handed out again by the
 // restart window).
@@ -126,10 +126,7 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
   // a checkpoint or the finish comes).
   const bool implicit = context.scene.coupling.is_implicit();
   std::string window_start;
-  // At the start of the window being iterated: the previous window's report and fields.
-  WindowResult start_result;
-  Fields start_fields;
-  Fields last_fields;  // published in the iteration just run (next_window clears them)
+  WindowResult start_result;  // the previous window's report, at the start of the one iterated
   bool output_pending = false;
   while (true) {
     const Window window = participant.next_window();
@@ -140,7 +137,8 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
           window_start, fmt::format("the start of window {} (in memory)", window.index + 1),
           context.program));
       output_pending = false;
-      write_checkpoint(context, solver, clock, window, start_result, start_fields);
+      write_checkpoint(context, solver, clock, window, start_result,
+                       participant.previous_window_fields());
       continue;
     }
     if (output_pending && (window.checkpoint || window.finish || window.iteration == 0)) {
@@ -171,7 +169,6 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
         solver.save_checkpoint(start);
         window_start = start.encode();
         start_result = last;
-        start_fields = std::move(last_fields);
       } else {
         solver.load_checkpoint(checkpoint::Reader(
             window_start, fmt::format("the start of window {} (in memory)", window.index),
@@ -184,7 +181,6 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
       write_if_due();
     }
     participant.done(last.steps, last.stable_dt);
-    if (implicit) last_fields = participant.published_fields();
   }
 }
 

@@ -12,33 +12,17 @@
 namespace cosim::mps {
 namespace {
 
-double frame_time(const std::filesystem::path& file, int index) {
-  return output::read_point_frame(file, index).time;
-}
-
-// The frame nearest to settings.time (frames are in time order: a bisection reads a few).
+// The frame nearest to settings.time.
 output::PointFrame frame_at(scenario::Section& section, const ChainStateSettings& s) {
   int frames = 0;
+  int nearest = -1;
   try {
     frames = output::count_point_frames(s.file);
+    nearest = output::nearest_point_frame(s.file, s.time);
   } catch (const std::exception& error) {
     section.fail("file", error.what());
   }
-  if (frames == 0) section.fail("file", s.file.string() + " holds no frames");
-  int low = 0, high = frames - 1;  // the first frame at or after the time, or the last
-  while (low < high) {
-    const int middle = (low + high) / 2;
-    if (frame_time(s.file, middle) < s.time) {
-      low = middle + 1;
-    } else {
-      high = middle;
-    }
-  }
-  int nearest = low;
-  if (low > 0 &&
-      std::abs(frame_time(s.file, low - 1) - s.time) < std::abs(frame_time(s.file, low) - s.time)) {
-    nearest = low - 1;
-  }
+  if (nearest < 0) section.fail("file", s.file.string() + " holds no frames");
   output::PointFrame frame = output::read_point_frame(s.file, nearest);
   if (std::abs(frame.time - s.time) > s.time_tolerance) {
     section.fail("time",
@@ -46,7 +30,8 @@ output::PointFrame frame_at(scenario::Section& section, const ChainStateSettings
                              "frames run from {:.6g} to {:.6g} s, the nearest is at "
                              "{:.6g} s",
                              s.file.string(), s.time_tolerance, s.time, frames,
-                             frame_time(s.file, 0), frame_time(s.file, frames - 1), frame.time));
+                             output::read_point_frame_time(s.file, 0),
+                             output::read_point_frame_time(s.file, frames - 1), frame.time));
   }
   return frame;
 }

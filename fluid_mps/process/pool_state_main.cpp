@@ -19,13 +19,7 @@ namespace {
 using namespace cosim;
 
 int nearest_frame(const std::filesystem::path& file, double time) {
-  const int frames = output::count_point_frames(file);
-  int nearest = -1;
-  double best = 0.0;
-  for (int i = 0; i < frames; ++i) {
-    const double gap = std::abs(output::read_point_frame(file, i).time - time);
-    if (nearest < 0 || gap < best) nearest = i, best = gap;
-  }
+  const int nearest = output::nearest_point_frame(file, time);
   if (nearest < 0) throw std::runtime_error(file.string() + " holds no frames");
   return nearest;
 }

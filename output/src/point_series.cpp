@@ -622,6 +622,49 @@ int count_point_frames(const std::filesystem::path& h5_path) {
   return frames_in(Checker{h5_path}, file.get());
 }
 
+namespace {
+double frame_time_of(const Checker& c, hid_t group, const std::string& g) {
+  double time = 0.0;
+  Handle attr =
+      c.id(H5Aopen(group, "time", H5P_DEFAULT), H5Aclose, g + "@time", "opening attribute");
+  c.ok(H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &time), g + "@time", "reading attribute");
+  return time;
+}
+}  // namespace
+
+double read_point_frame_time(const std::filesystem::path& h5_path, int index) {
+  Handle file = open_for_reading(h5_path);
+  const Checker c{h5_path};
+  const int count = frames_in(c, file.get());
+  if (index < 0 || index >= count) {
+    throw std::out_of_range("cosim_output: frame index " + std::to_string(index) +
+                            " out of range for '" + h5_path.string() + "' with " +
+                            std::to_string(count) + " frames");
+  }
+  const std::string g = frame_group(index);
+  Handle group = c.open_group(file.get(), g, g);
+  return frame_time_of(c, group.get(), g);
+}
+
+int nearest_point_frame(const std::filesystem::path& h5_path, double time) {
+  const int frames = count_point_frames(h5_path);
+  if (frames == 0) return -1;
+  int low = 0, high = frames - 1;  // the first frame at or after the time, or the last
+  while (low < high) {
+    const int middle = (low + high) / 2;
+    if (read_point_frame_time(h5_path, middle) < time) {
+      low = middle + 1;
+    } else {
+      high = middle;
+    }
+  }
+  if (low > 0 && std::abs(read_point_frame_time(h5_path, low - 1) - time) <
+                     std::abs(read_point_frame_time(h5_path, low) - time)) {
+    return low - 1;
+  }
+  return low;
+}
+
 PointFrame read_point_frame(const std::filesystem::path& h5_path, int index) {
   Handle file = open_for_reading(h5_path);
   const Checker c{h5_path};
@@ -636,11 +679,7 @@ PointFrame read_point_frame(const std::filesystem::path& h5_path, int index) {
   Handle group = c.open_group(file.get(), g, g);
 
   PointFrame frame;
-  {
-    Handle attr =
-        c.id(H5Aopen(group.get(), "time", H5P_DEFAULT), H5Aclose, g + "@time", "opening attribute");
-    c.ok(H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &frame.time), g + "@time", "reading attribute");
-  }
+  frame.time = frame_time_of(c, group.get(), g);
   std::size_t n = 0;
   frame.positions = unflatten(
       c.read<double>(group.get(), "positions", g + "/positions", H5T_NATIVE_DOUBLE, 2, 3, n));

@@ -222,6 +222,24 @@ TEST_F(PointSeriesTest, RoundTripsFramesOfVaryingSizeBitExact) {
   expect_frames_equal(written[0], read_point_frame(dir_ / "run.h5", -4));
 }
 
+TEST_F(PointSeriesTest, FindsTheFrameNearestToATimeFromTheFrameTimesAlone) {
+  {
+    PointSeriesWriter writer(dir_ / "times", "times");
+    for (const double t : {0.0, 0.1, 0.2, 0.35, 0.5})
+      writer.write_frame(make_frame(3, t, 1, false));
+  }
+  const auto file = dir_ / "times.h5";
+  EXPECT_EQ(cosim::output::read_point_frame_time(file, 3), 0.35);
+  EXPECT_THROW(cosim::output::read_point_frame_time(file, 5), std::out_of_range);
+  EXPECT_EQ(cosim::output::nearest_point_frame(file, -1.0), 0);
+  EXPECT_EQ(cosim::output::nearest_point_frame(file, 0.14), 1);
+  EXPECT_EQ(cosim::output::nearest_point_frame(file, 0.16), 2);
+  EXPECT_EQ(cosim::output::nearest_point_frame(file, 0.3), 3);
+  EXPECT_EQ(cosim::output::nearest_point_frame(file, 9.0), 4);
+  { PointSeriesWriter writer(dir_ / "none", "none"); }
+  EXPECT_EQ(cosim::output::nearest_point_frame(dir_ / "none.h5", 0.0), -1);
+}
+
 TEST_F(PointSeriesTest, RoundTripsEmptyAndFieldlessFrames) {
   PointFrame bare;
   bare.time = 2.5;

@@ -37,11 +37,11 @@ class ReplayProcess final : public coupler::Solver {
       if (!recording_.windows.empty()) {
         held = fmt::format("it holds windows {} to {}", recording_.windows.begin()->first.window,
                            recording_.windows.rbegin()->first.window);
-        const auto next = recording_.windows.lower_bound({window.index + 1, 0});
-        const auto last = next == recording_.windows.begin() ? next : std::prev(next);
-        if (window.iteration > 0 && last != next && last->first.window == window.index) {
-          held +=
-              fmt::format("; window {} iterations 0 to {}", window.index, last->first.iteration);
+        const auto after = recording_.windows.lower_bound({window.index + 1, 0});
+        if (window.iteration > 0 && after != recording_.windows.begin() &&
+            std::prev(after)->first.window == window.index) {
+          held += fmt::format("; window {} iterations 0 to {}", window.index,
+                              std::prev(after)->first.iteration);
         }
       }
       throw std::runtime_error(fmt::format("{}: {} of '{}' is not in the recording ({})",

@@ -87,6 +87,11 @@ class Participant {
   const std::vector<std::pair<std::string, std::vector<double>>>& published_fields() const {
     return window_fields_;
   }
+  // With `rollback` (implicit schemes): every field published in the previous window's last
+  // iteration, the one the coupler accepted (what a checkpoint of that window keeps).
+  const std::vector<std::pair<std::string, std::vector<double>>>& previous_window_fields() const {
+    return previous_window_fields_;
+  }
   // Publishes a field for the current window. Fields that fit into one message together travel
   // inside the window's DONE report; larger ones go out at once in chunks.
   void publish(const std::string& field, std::span<const double> values);
@@ -114,6 +119,8 @@ class Participant {
 
  private:
   void publish_state(int8_t state, int steps, double stable_dt, const std::string& message);
+  // The answer that the checkpoint after `window` is written (its file, bytes, seconds).
+  void publish_checkpointed(int64_t window, const std::string& description_json);
   void heartbeat_loop();
   void check_abort();
   void flush_inline_fields();
@@ -149,6 +156,7 @@ class Participant {
   std::vector<cosim_msgs::field_t> pending_fields_;
   std::size_t pending_inline_values_ = 0;
   std::vector<std::pair<std::string, std::vector<double>>> window_fields_;
+  std::vector<std::pair<std::string, std::vector<double>>> previous_window_fields_;
   // Checkpoints asked for and not yet written; those written, with their answer (repeated when
   // the coupler asks again: an answer may be lost).
   std::set<int64_t> checkpoint_requests_;

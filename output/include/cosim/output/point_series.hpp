@@ -95,6 +95,11 @@ class PointSeriesWriter {
 // Reads frame `index` (negative counts from the end: -1 is the last frame).
 PointFrame read_point_frame(const std::filesystem::path& h5_path, int index);
 int count_point_frames(const std::filesystem::path& h5_path);
+// The time [s] of frame `index` alone (no dataset is read).
+double read_point_frame_time(const std::filesystem::path& h5_path, int index);
+// The frame whose time is nearest to `time` [s], found by bisection (frames are written in time
+// order; of two equally near, the later); -1 for a file without frames.
+int nearest_point_frame(const std::filesystem::path& h5_path, double time);
 // Every series of a file, by name; files without a /series group have none.
 std::vector<Series> read_series(const std::filesystem::path& h5_path);
 // The unit, description and legend attributes of one dataset, e.g. "/frames/000000/positions".
