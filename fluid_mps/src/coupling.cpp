@@ -38,6 +38,13 @@ std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
 
 }  // namespace
 
+std::vector<std::vector<int>> FluidSystem::fluid_particles_near(
+    const std::vector<Eigen::Vector3d>& points, double radius) const {
+  auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+  for (auto& group : groups) std::sort(group.begin(), group.end());
+  return groups;
+}
+
 std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
     const std::vector<Eigen::Vector3d>& points, double radius,
     std::vector<double>* water_fraction) const {

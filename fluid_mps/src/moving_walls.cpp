@@ -44,11 +44,11 @@ std::vector<Eigen::Vector3d> plate_pressure_loads(const FluidSystem& system,
   std::vector<Eigen::Vector3d> loads(count, Eigen::Vector3d::Zero());
   if (count < 2) return loads;
   const auto& x = system.positions();
-  const auto& kinds = system.kinds();
   const auto& p = system.pressures();
   const auto& periodic = system.parameters().periodic;
   const Eigen::Vector3d& gravity = system.parameters().gravity;
   const double rho = system.parameters().density;
+  const auto near = system.fluid_particles_near(nodes, radius);
   for (std::size_t k = 0; k < count; ++k) {
     // Tangent over the neighbouring nodes (one-sided at the ends), normal in the plane.
     const Eigen::Vector3d& before = nodes[k == 0 ? 0 : k - 1];
@@ -61,10 +61,8 @@ std::vector<Eigen::Vector3d> plate_pressure_loads(const FluidSystem& system,
     if (k + 1 < count) share += 0.5 * (nodes[k + 1] - nodes[k]).norm();
     double sum[2] = {0.0, 0.0};
     int found[2] = {0, 0};
-    for (int i = 0; i < system.particle_count(); ++i) {
-      if (kinds[i] != ParticleKind::fluid) continue;
+    for (const int i : near[k]) {
       const Eigen::Vector3d offset = periodic.wrap(x[i] - nodes[k]);
-      if (offset.squaredNorm() > radius * radius) continue;
       const double side = offset.dot(normal);
       if (side == 0.0) continue;
       const int s = side > 0.0 ? 0 : 1;

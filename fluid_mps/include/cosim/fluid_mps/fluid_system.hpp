@@ -100,6 +100,10 @@ class FluidSystem {
   std::vector<Eigen::Vector3d> sample_velocity(const std::vector<Eigen::Vector3d>& points,
                                                double radius,
                                                std::vector<double>* water_fraction = nullptr) const;
+  // Indices of the fluid particles within `radius` of each point (periodic distances), in
+  // increasing order: the particles sample_velocity averages.
+  std::vector<std::vector<int>> fluid_particles_near(const std::vector<Eigen::Vector3d>& points,
+                                                     double radius) const;
 
   // Free-surface height above each point: the vertical coordinate (y in 2D, z in 3D) of the
   // highest fluid particle of each column l0 wide, averaged over the wet columns within a
