@@ -1,6 +1,7 @@
 #include "cosim/checkpoint/archive.hpp"
 
-#include <array>
+#include <zlib.h>
+
 #include <cerrno>
 #include <fstream>
 #include <system_error>
@@ -10,19 +11,6 @@ namespace cosim::checkpoint {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'O', 'S', 'I', 'M', 'C', 'K', 'P'};
-
-const std::array<std::uint32_t, 256>& crc_table() {
-  static const auto table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  return table;
-}
 
 template <class T>
 void append(std::string& out, const T& value) {
@@ -110,11 +98,9 @@ std::pair<std::string, std::size_t> check_envelope(const std::filesystem::path& 
 }  // namespace
 
 std::uint32_t crc32(const void* data, std::size_t size, std::uint32_t crc) {
-  const auto& table = crc_table();
-  const auto* bytes = static_cast<const unsigned char*>(data);
-  crc = ~crc;
-  for (std::size_t i = 0; i < size; ++i) crc = table[(crc ^ bytes[i]) & 0xFFu] ^ (crc >> 8);
-  return ~crc;
+  // zlib's crc32_z takes a size_t length (crc32 takes 32 bits: a checkpoint may exceed 4 GB).
+  return static_cast<std::uint32_t>(
+      ::crc32_z(crc, static_cast<const Bytef*>(data), static_cast<z_size_t>(size)));
 }
 
 void Writer::bytes(std::string_view name, const void* data, std::size_t element_size,
