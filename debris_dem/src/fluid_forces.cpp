@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "cosim/numerics/lucy_kernel.hpp"
+
 namespace cosim::dem {
 namespace {
 
@@ -91,11 +93,7 @@ double di_felice_exponent(double reynolds) {
 }
 
 double voidage_kernel(double distance, double radius) {
-  const double q = distance / radius;
-  if (q >= 1.0) return 0.0;
-  const double one_minus = 1.0 - q;
-  return 105.0 / (16.0 * kPi * radius * radius * radius) * (1.0 + 3.0 * q) * one_minus * one_minus *
-         one_minus;
+  return numerics::lucy_kernel(distance, radius, 3);
 }
 
 std::vector<double> local_voidage(const std::vector<Eigen::Vector3d>& centers,

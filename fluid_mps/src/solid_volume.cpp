@@ -2,28 +2,12 @@
 // particles, from the solids' volumes spread with a normalised kernel.
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/numerics/lucy_kernel.hpp"
 
 namespace cosim::mps {
-namespace {
-
-// Lucy's kernel (1 + 3q)(1 - q)^3, q = r / h < 1, normalised to unit integral over the plane
-// (5 / (pi h^2)) or space (105 / (16 pi h^3)); smooth at the edge, so phi changes smoothly as a
-// solid moves.
-double spreading_kernel(double distance, double radius, int dimension) {
-  const double q = distance / radius;
-  if (q >= 1.0) return 0.0;
-  const double one_minus = 1.0 - q;
-  const double shape = (1.0 + 3.0 * q) * one_minus * one_minus * one_minus;
-  const double norm = dimension == 2 ? 5.0 / (std::numbers::pi * radius * radius)
-                                     : 105.0 / (16.0 * std::numbers::pi * radius * radius * radius);
-  return norm * shape;
-}
-
-}  // namespace
 
 void FluidSystem::set_solid_volumes(std::vector<Eigen::Vector3d> points,
                                     std::vector<double> volumes, double radius) {
@@ -62,7 +46,7 @@ void FluidSystem::update_solid_fractions(const std::vector<Eigen::Vector3d>& x) 
       if (solid_volumes_[e] <= 0.0) continue;
       const double r2 = periodic.wrap(x[i] - solid_points_[e]).squaredNorm();
       if (r2 >= reach2) continue;
-      phi += solid_volumes_[e] * spreading_kernel(std::sqrt(r2), solid_radius_, d);
+      phi += solid_volumes_[e] * numerics::lucy_kernel(std::sqrt(r2), solid_radius_, d);
     }
     largest = std::max(largest, phi);
     solid_fraction_[i] = std::min(phi, kMaximumSolidFraction);

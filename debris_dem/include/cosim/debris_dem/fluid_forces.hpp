@@ -34,7 +34,7 @@ double cylinder_crossflow_drag_coefficient(double reynolds);
 // d / mu on the superficial slip velocity. Re <= 0 gives the Stokes limit 3.7.
 double di_felice_exponent(double reynolds);
 
-// Lucy's quartic kernel (Lucy, Astron. J. 82 (1977) 1013-1024), normalised in 3D:
+// Lucy's quartic kernel in 3D (cosim/numerics/lucy_kernel.hpp; Lucy, Astron. J. 82 (1977)):
 // W(r) = 105 / (16 pi R^3) (1 + 3 q) (1 - q)^3, q = r / R < 1, so that int W dV = 1; smooth with
 // zero slope at 0 and R, so element volumes enter and leave the average gradually.
 double voidage_kernel(double distance, double radius);
