@@ -50,211 +50,241 @@ AccelerationOptions acceleration_options(const scenario::ImplicitSettings& setti
 }
 }  // namespace
 
-double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result) {
-  const auto& settings = scene_.coupling.implicit;
-  const bool serial = scene_.coupling.is_serial();
-  const double resend = scene_.coupling.resend_interval;
-  Accelerator accelerator(acceleration_options(settings));
-  result.acceleration = acceleration_name(accelerator.options().kind);
+// The implicit loop's state, and its stages as functions: granting one iteration, reading a
+// field, gathering the iterated vector, publishing the next input, iterating one window.
+class Coupler::ImplicitWindows {
+ public:
+  ImplicitWindows(Coupler& coupler, ProcessGroup& processes, RunResult& result)
+      : c_(coupler),
+        processes_(processes),
+        result_(result),
+        settings_(coupler.scene_.coupling.implicit),
+        serial_(coupler.scene_.coupling.is_serial()),
+        accelerator_(acceleration_options(settings_)),
+        flow_(coupler.scene_.flow()) {
+    result_.acceleration = acceleration_name(accelerator_.options().kind);
+    for (const auto* solid : c_.scene_.solids()) solids_.push_back(solid->acts_as);
+    blocks_ = iterated_blocks();
+  }
 
-  const auto* flow = scene_.flow();
-  std::vector<std::string> solids;
-  for (const auto* solid : scene_.solids()) solids.push_back(solid->acts_as);
+  // Window 0 (or the restart window) is the initial exchange, not iterated; every later window
+  // is iterated to convergence. Returns the simulated time reached.
+  double run() {
+    double next_time = c_.start_plan();
+    first_ = static_cast<int64_t>(c_.plan_.size()) - 1;
+    accepted_[first_ - 1] = 0;
+    // Length of the window before: a restart continues after a window of the nominal length
+    // (an adaptive restart's first measure may then cost one iteration more, never a wrong
+    // result).
+    double previous_dt = c_.options_.restart ? c_.scene_.coupling.window : 0.0;
+    run_iteration(first_, 0);
+    accepted_[first_] = 0;
+    int64_t completed = first_;
+    const Clock::time_point window_one_started = Clock::now();
+    while (c_.plan_next_window(next_time, stable_dt_, result_)) {
+      const auto index = static_cast<int64_t>(c_.plan_.size()) - 1;
+      const double dt = c_.plan_.back().second;
+      // The flow's first iteration takes window k-1's drag rescaled to window k's length (the
+      // window after window 0 takes none: window 0 has no length).
+      const double drag_scale = previous_dt > 0.0 ? previous_dt / dt : 0.0;
+      const int32_t iteration =
+          iterate_window(index, gather(index - 1, accepted_[index - 1], drag_scale));
+      accelerator_.end_window();
+      accepted_[index] = iteration;
+      result_.iterations.push_back(iteration + 1);
+      completed = index;
+      result_.windows_completed = completed;
+      previous_dt = dt;
+      c_.bus_->forget_fields_before(index - 2);
+    }
+    c_.await_checkpoints(processes_, completed, false);
+    c_.book_overhead(result_, window_one_started, completed, serial_);
+    return next_time;
+  }
 
-  double next_time = start_plan();
-  const int64_t first = static_cast<int64_t>(plan_.size()) - 1;
-  std::map<int64_t, double> stable_dt;  // smallest stable dt of each window's accepted iteration
-  std::map<int64_t, int32_t> accepted{{first - 1, 0}};
-  Clock::time_point window_one_started{};
-
-  // Every iteration's report counts its steps; only iteration 0 counts a window.
-  auto accept = [&](const status_t& status) {
-    book_report(status, status.header.iteration == 0, stable_dt);
-  };
+ private:
+  // Iterates window `index` from the input x until the fields converge or the limit is
+  // reached; returns the accepted iteration.
+  int32_t iterate_window(int64_t index, Eigen::VectorXd x) {
+    Eigen::VectorXd scales;
+    for (int32_t iteration = 0;; ++iteration) {
+      run_iteration(index, iteration);
+      const Eigen::VectorXd h = gather(index, iteration, 1.0);
+      if (h.size() != x.size()) {
+        throw Failure(fmt::format("the exchanged fields of {} changed size between iterations",
+                                  c_.window_text(index)));
+      }
+      const auto measure = measure_convergence(blocks_, x, h, settings_.relative_tolerance);
+      if (measure.converged) return iteration;
+      if (iteration + 1 >= settings_.max_iterations) {
+        ++result_.windows_at_max_iterations;
+        const std::string text = fmt::format(
+            "{} did not converge in {} coupling iterations ({} is {:.3g} times its tolerance)",
+            c_.window_text(index), settings_.max_iterations, measure.worst_field, measure.worst);
+        if (settings_.at_max_iterations == scenario::AtMaxIterations::stop) {
+          throw Failure(text + " (coupling.implicit.at_max_iterations: stop)");
+        }
+        if (settings_.max_iterations > 1) spdlog::warn("{}; continuing", text);
+        return iteration;
+      }
+      // One scale per window (from its first answer), so the accelerator's columns of one
+      // window are differences in the same units.
+      if (iteration == 0) scales = block_scales(blocks_, h);
+      const Eigen::VectorXd next =
+          accelerator_.next(x.cwiseQuotient(scales), h.cwiseQuotient(scales)).cwiseProduct(scales);
+      if (!next.allFinite()) {
+        throw Failure(fmt::format("the coupling iteration of {} diverged (iteration {}: {})",
+                                  c_.window_text(index), iteration, measure.worst_field));
+      }
+      x = next;
+      publish_input(index, iteration + 1, x, iteration);
+    }
+  }
 
   // One iteration of one window, granted until every participant's DONE is in.
-  auto run_iteration = [&](int64_t index, int32_t iteration) {
-    const auto [time, dt] = plan_[index];
-    stable_dt.erase(index);
+  void run_iteration(int64_t index, int32_t iteration) {
+    const auto [time, dt] = c_.plan_[index];
+    stable_dt_.erase(index);
     Collection collection;
     collection.stamp = Stamp{index, time, dt, iteration};
     collection.command = window_t::COMMAND_ADVANCE;
     collection.answer = status_t::STATE_DONE;
-    collection.during = window_text(index) + fmt::format(", iteration {}", iteration);
+    collection.during = c_.window_text(index) + fmt::format(", iteration {}", iteration);
     collection.failed_during = "in " + collection.during;
-    collection.accept = accept;
+    // Every iteration's report counts its steps; only iteration 0 counts a window.
+    collection.accept = [this](const status_t& status) {
+      c_.book_report(status, status.header.iteration == 0, stable_dt_);
+    };
     // Stopped from outside mid-window: every participant rolls back to the start of this window
     // and saves it, the state after the last accepted window (run_solver_loop).
-    collection.on_interrupt = [&, index] {
+    collection.on_interrupt = [this, index] {
       const int64_t last_accepted = index - 1;
-      if (last_accepted <= first) return;
-      book_.request(last_accepted, end_of(last_accepted));
-      await_checkpoints(processes, last_accepted, true);
-      if (book_.complete(last_accepted)) result.windows_completed = last_accepted;
+      if (last_accepted <= first_) return;
+      c_.book_.request(last_accepted, c_.end_of(last_accepted));
+      c_.await_checkpoints(processes_, last_accepted, true);
+      if (c_.book_.complete(last_accepted)) result_.windows_completed = last_accepted;
     };
-    const int32_t previous = accepted.contains(index - 1) ? accepted[index - 1] : 0;
-    collection.broadcast = [&, index, iteration, previous, time = time, dt = dt] {
-      bus_->publish_window(Stamp{index, time, dt, iteration}, window_t::COMMAND_ADVANCE,
-                           result.total_windows, "", {{time, dt}}, book_.pending(index - 1),
-                           previous);
+    const int32_t previous = accepted_.contains(index - 1) ? accepted_[index - 1] : 0;
+    collection.broadcast = [this, index, iteration, previous, time = time, dt = dt] {
+      c_.bus_->publish_window(Stamp{index, time, dt, iteration}, window_t::COMMAND_ADVANCE,
+                              result_.total_windows, "", {{time, dt}}, c_.book_.pending(index - 1),
+                              previous);
     };
-    collect(processes, collection);
-  };
+    c_.collect(processes_, collection);
+  }
 
   // A field of (index, iteration) heard from `sender`, asking again until it comes.
-  auto field = [&](const std::string& sender, const std::string& name, int64_t index,
-                   int32_t iteration) {
+  std::vector<double> field(const std::string& sender, const std::string& name, int64_t index,
+                            int32_t iteration) {
     const FieldKey key{sender, index, name, iteration};
+    const double resend = c_.scene_.coupling.resend_interval;
     const auto start = Clock::now();
     auto last_request = start;
     while (true) {
-      if (auto values = bus_->field_values(key)) return std::move(*values);
-      if (seconds_since(start) > scene_.coupling.timeout) {
-        throw Failure(
-            fmt::format("'{}' did not deliver its field '{}' of {}, iteration {}, "
-                        "within {:.1f} s",
-                        sender, name, window_text(index), iteration, scene_.coupling.timeout));
+      if (auto values = c_.bus_->field_values(key)) return std::move(*values);
+      if (seconds_since(start) > c_.scene_.coupling.timeout) {
+        throw Failure(fmt::format(
+            "'{}' did not deliver its field '{}' of {}, iteration {}, within {:.1f} s", sender,
+            name, c_.window_text(index), iteration, c_.scene_.coupling.timeout));
       }
       if (seconds_since(last_request) >= resend) {
-        bus_->request_field(key);
+        c_.bus_->request_field(key);
         last_request = Clock::now();
       }
-      bus_->poll(resend);
+      c_.bus_->poll(resend);
     }
-  };
+  }
 
   // The iterated fields, in a fixed order: per solid its positions [m], velocities [m/s] and
   // drag [N]; in the parallel scheme the flow's velocity samples at it [m/s].
-  std::vector<FieldBlock> blocks;
-  for (const auto& solid : solids) {
-    for (const char* name : {exchange::kPositions, exchange::kVelocities, exchange::kDrag}) {
-      FieldBlock block;
-      block.sender = solid;
-      block.field = name;
-      block.input = exchange::solid_field_for_flow(name, solid);
-      block.absolute = name == std::string(exchange::kPositions)    ? settings.absolute_position
-                       : name == std::string(exchange::kVelocities) ? settings.absolute_velocity
-                                                                    : settings.absolute_force;
-      blocks.push_back(block);
+  std::vector<FieldBlock> iterated_blocks() const {
+    std::vector<FieldBlock> blocks;
+    for (const auto& solid : solids_) {
+      for (const char* name : {exchange::kPositions, exchange::kVelocities, exchange::kDrag}) {
+        FieldBlock block;
+        block.sender = solid;
+        block.field = name;
+        block.input = exchange::solid_field_for_flow(name, solid);
+        block.absolute = name == std::string(exchange::kPositions)    ? settings_.absolute_position
+                         : name == std::string(exchange::kVelocities) ? settings_.absolute_velocity
+                                                                      : settings_.absolute_force;
+        blocks.push_back(block);
+      }
+      if (flow_ && !serial_) {
+        FieldBlock block;
+        block.sender = flow_->acts_as;
+        block.field = exchange::ambient_velocity_field(solid);
+        block.input = block.field;
+        block.absolute = settings_.absolute_velocity;
+        blocks.push_back(block);
+      }
     }
-    if (flow && !serial) {
-      FieldBlock block;
-      block.sender = flow->acts_as;
-      block.field = exchange::ambient_velocity_field(solid);
-      block.input = block.field;
-      block.absolute = settings.absolute_velocity;
-      blocks.push_back(block);
-    }
+    return blocks;
   }
+
   // The fields of (index, iteration) as one vector; `drag_scale` multiplies the drag blocks
   // (iteration 0 takes window k-1's drag as the flow does: rescaled by dt_{k-1} / dt_k).
-  auto gather = [&](int64_t index, int32_t iteration, double drag_scale) {
+  Eigen::VectorXd gather(int64_t index, int32_t iteration, double drag_scale) {
     std::vector<std::vector<double>> parts;
     Eigen::Index total = 0;
-    for (auto& block : blocks) {
+    for (auto& block : blocks_) {
       parts.push_back(field(block.sender, block.field, index, iteration));
       block.offset = total;
       block.size = static_cast<Eigen::Index>(parts.back().size());
       total += block.size;
     }
     Eigen::VectorXd vector(total);
-    for (std::size_t b = 0; b < blocks.size(); ++b) {
-      const double scale = blocks[b].field == exchange::kDrag ? drag_scale : 1.0;
-      for (Eigen::Index j = 0; j < blocks[b].size; ++j) {
-        vector(blocks[b].offset + j) = scale * parts[b][static_cast<std::size_t>(j)];
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+      const double scale = blocks_[b].field == exchange::kDrag ? drag_scale : 1.0;
+      for (Eigen::Index j = 0; j < blocks_[b].size; ++j) {
+        vector(blocks_[b].offset + j) = scale * parts[b][static_cast<std::size_t>(j)];
       }
     }
     return vector;
-  };
+  }
+
   // What the next iteration reads from the coupler: the accelerated input, and the fields it
-  // passes on as they are (displaced volumes; in the parallel scheme water fraction and surface).
-  auto publish_input = [&](int64_t index, int32_t iteration, const Eigen::VectorXd& x,
-                           int32_t answered) {
-    const auto [time, dt] = plan_[index];
+  // passes on as they are (displaced volumes; in the parallel scheme water fraction and
+  // surface).
+  void publish_input(int64_t index, int32_t iteration, const Eigen::VectorXd& x, int32_t answered) {
+    const auto [time, dt] = c_.plan_[index];
     const Stamp stamp{index, time, dt, iteration};
-    for (const auto& block : blocks) {
-      bus_->publish_field(
+    for (const auto& block : blocks_) {
+      c_.bus_->publish_field(
           stamp, block.input,
           std::span<const double>(x.data() + block.offset, static_cast<std::size_t>(block.size)));
     }
-    for (const auto& solid : solids) {
+    for (const auto& solid : solids_) {
       if (exchange::displaces_water(solid)) {
         const auto volumes = field(solid, exchange::kVolumes, index, answered);
-        bus_->publish_field(stamp, exchange::solid_field_for_flow(exchange::kVolumes, solid),
-                            volumes);
+        c_.bus_->publish_field(stamp, exchange::solid_field_for_flow(exchange::kVolumes, solid),
+                               volumes);
       }
-      if (flow && !serial) {
+      if (flow_ && !serial_) {
         for (const auto& name :
              {exchange::water_fraction_field(solid), exchange::surface_field(solid)}) {
-          bus_->publish_field(stamp, name, field(flow->acts_as, name, index, answered));
+          c_.bus_->publish_field(stamp, name, field(flow_->acts_as, name, index, answered));
         }
       }
     }
-  };
-
-  // Length of the window before: a restart continues after a window of the nominal length (an
-  // adaptive restart's first measure may then cost one iteration more, never a wrong result).
-  double previous_dt = options_.restart ? scene_.coupling.window : 0.0;
-  int64_t completed = first - 1;
-  // Window 0 (or the restart window): the initial exchange, not iterated.
-  run_iteration(first, 0);
-  accepted[first] = 0;
-  completed = first;
-  window_one_started = Clock::now();
-  while (plan_next_window(next_time, stable_dt, result)) {
-    const auto index = static_cast<int64_t>(plan_.size()) - 1;
-    const double dt = plan_.back().second;
-
-    // The flow's first iteration takes window k-1's drag rescaled to window k's length (the
-    // window after window 0 takes none: window 0 has no length).
-    const double drag_scale = previous_dt > 0.0 ? previous_dt / dt : 0.0;
-    Eigen::VectorXd x = gather(index - 1, accepted[index - 1], drag_scale);
-    int32_t iteration = 0;
-    Eigen::VectorXd scales;
-    while (true) {
-      run_iteration(index, iteration);
-      const Eigen::VectorXd h = gather(index, iteration, 1.0);
-      if (h.size() != x.size()) {
-        throw Failure(fmt::format("the exchanged fields of {} changed size between iterations",
-                                  window_text(index)));
-      }
-      const auto measure = measure_convergence(blocks, x, h, settings.relative_tolerance);
-      if (measure.converged) break;
-      if (iteration + 1 >= settings.max_iterations) {
-        ++result.windows_at_max_iterations;
-        const std::string text = fmt::format(
-            "{} did not converge in {} coupling iterations ({} is {:.3g} times its tolerance)",
-            window_text(index), settings.max_iterations, measure.worst_field, measure.worst);
-        if (settings.at_max_iterations == scenario::AtMaxIterations::stop) {
-          throw Failure(text + " (coupling.implicit.at_max_iterations: stop)");
-        }
-        if (settings.max_iterations > 1) spdlog::warn("{}; continuing", text);
-        break;
-      }
-      // One scale per window (from its first answer), so the accelerator's columns of one
-      // window are differences in the same units.
-      if (iteration == 0) scales = block_scales(blocks, h);
-      const Eigen::VectorXd next =
-          accelerator.next(x.cwiseQuotient(scales), h.cwiseQuotient(scales)).cwiseProduct(scales);
-      if (!next.allFinite()) {
-        throw Failure(fmt::format("the coupling iteration of {} diverged (iteration {}: {})",
-                                  window_text(index), iteration, measure.worst_field));
-      }
-      x = next;
-      publish_input(index, iteration + 1, x, iteration);
-      ++iteration;
-    }
-    accelerator.end_window();
-    accepted[index] = iteration;
-    result.iterations.push_back(iteration + 1);
-    completed = index;
-    result.windows_completed = completed;
-    previous_dt = dt;
-    bus_->forget_fields_before(index - 2);
   }
-  await_checkpoints(processes, completed, false);
-  book_overhead(result, window_one_started, completed, serial);
-  return next_time;
+
+  Coupler& c_;
+  ProcessGroup& processes_;
+  RunResult& result_;
+  const scenario::ImplicitSettings& settings_;
+  const bool serial_;
+  Accelerator accelerator_;
+  const scenario::ParticipantEntry* flow_;
+  std::vector<std::string> solids_;
+  std::vector<FieldBlock> blocks_;
+  int64_t first_ = 0;
+  std::map<int64_t, double> stable_dt_;  // smallest stable dt of each window's accepted iteration
+  std::map<int64_t, int32_t> accepted_;  // the accepted iteration of each window
+};
+
+double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result) {
+  return ImplicitWindows(*this, processes, result).run();
 }
 
 }  // namespace cosim::coupler

@@ -106,6 +106,7 @@ class Coupler {
   // The same for the implicit schemes: one iteration of one window granted at a time, each
   // window iterated until the exchanged fields converge (coupler/src/coupler_implicit.cpp).
   double run_implicit_windows(ProcessGroup& processes, RunResult& result);
+  class ImplicitWindows;  // that loop's state and stages (coupler_implicit.cpp)
   // Both window loops (coupler.cpp, coupler_implicit.cpp):
   // plan_ from window 0, or from a restart's window N (its start time), which it returns.
   double start_plan();
