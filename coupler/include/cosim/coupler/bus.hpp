@@ -166,6 +166,8 @@ class Bus {
 
  private:
   using Clock = std::chrono::steady_clock;
+  // Gaps wider than this are not a lost message but a sender we started hearing late.
+  static constexpr int64_t kLargestGap = 4096;
   struct Assembly {
     int32_t chunk_count = 0;
     int64_t total_values = 0;
