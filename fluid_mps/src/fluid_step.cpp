@@ -388,6 +388,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
   in.pressure = &pressure_;
   in.periodic = &p.periodic;
   in.unknown = &unknown_;
+  in.surface_threshold = p.surface_threshold;
+  in.solid_fraction = &phi_;
   pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {

@@ -199,69 +199,118 @@ std::vector<Eigen::Vector3d> corrected_gradient(const GradientInput& in,
   return result;
 }
 
+double correction_weight(const GradientInput& in, int i) {
+  const NeighbourList& list = *in.neighbours;
+  const auto& kinds = *in.kinds;
+  double density = 0.0;
+  for (std::int64_t k = in.begin(i); k < in.end(i); ++k) {
+    const double r = list.distance[k];
+    if (!is_inactive(kinds[list.index[k]]) && r < in.radius) density += weight(r, in.radius);
+  }
+  const double phi = in.solid_fraction ? (*in.solid_fraction)[i] : 0.0;
+  const double beta = in.surface_threshold;
+  const double t = std::clamp((density / (in.n0 * (1.0 - phi)) - beta) / (1.0 - beta), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+namespace {
+
+// The gradient sum of fluid particle i by `form` and the walls' share of it (see
+// pressure_gradients); `minimum` holds p^_i, `normals` the wall normals (symmetric_normal_wall).
+void gradient_at(Form form, const GradientInput& in, int i, const std::vector<double>& minimum,
+                 const std::vector<Eigen::Vector3d>& normals, Eigen::Vector3d& gradient,
+                 Eigen::Vector3d& wall) {
+  const auto& p = *in.pressure;
+  // The corrected forms return n0/d C_i times their sum, so every form is scaled the same.
+  const double uncorrected = in.n0 / in.dimension;
+  auto minimum_form = [&] { return pair_sums(in, i, [&](int j) { return p[j] - minimum[i]; }); };
+  switch (form) {
+    case Form::minimum: {  // Koshizuka & Oka (1996); seed 000 eq. (2) with p^_i
+      const PairSums s = minimum_form();
+      gradient = s.all;
+      wall = s.wall;
+      return;
+    }
+    case Form::symmetric: {  // the pair form of SPH: antisymmetric in i, j
+      const PairSums s = pair_sums(in, i, [&](int j) { return p[i] + p[j]; });
+      gradient = s.all;
+      wall = s.wall;
+      return;
+    }
+    case Form::symmetric_normal_wall: {
+      const PairSums s = pair_sums(
+          in, i, [&](int j) { return p[i] + p[j]; }, &normals);
+      wall = normal_wall_share(s, p[i]);
+      gradient = s.fluid + wall;
+      return;
+    }
+    case Form::corrected:             // Khayyer & Gotoh (2011) correction of the minimum form
+    case Form::corrected_interior: {  // the same, off the free surface only
+      const PairSums s = minimum_form();
+      if (form == Form::corrected || full_neighbourhood(in, i)) {
+        const Eigen::Matrix3d c = uncorrected * correction_matrix(in, i);
+        gradient = c * s.all;
+        wall = c * s.wall;
+      } else {
+        gradient = s.all;
+        wall = s.wall;
+      }
+      return;
+    }
+    case Form::corrected_blended: {  // (1 - w_i) I + w_i n0/d C_i on the minimum form
+      const PairSums s = minimum_form();
+      const double w = correction_weight(in, i);
+      gradient = s.all;
+      wall = s.wall;
+      if (w > 0.0) {
+        const Eigen::Matrix3d c = uncorrected * correction_matrix(in, i);
+        gradient = w < 1.0 ? Eigen::Vector3d((1.0 - w) * s.all + w * (c * s.all)) : c * s.all;
+        wall = w < 1.0 ? Eigen::Vector3d((1.0 - w) * s.wall + w * (c * s.wall)) : c * s.wall;
+      }
+      return;
+    }
+    case Form::corrected_split: {  // the blend on the Taylor part sum (p_j - p_i) F_ij only
+      const PairSums s = minimum_form();
+      gradient = s.all;
+      wall = s.wall;
+      const double w = correction_weight(in, i);
+      if (w > 0.0) {
+        // sum (p_j - p^_i) F = sum (p_j - p_i) F + (p_i - p^_i) sum F: the first part gets
+        // w (n0/d C_i - I) added, the second (the repulsion that keeps p^_i) stays as it is.
+        const double excess = p[i] - minimum[i];
+        const PairSums unit = pair_sums(in, i, [](int) { return 1.0; });
+        const Eigen::Matrix3d change =
+            w * (uncorrected * correction_matrix(in, i) - Eigen::Matrix3d::Identity());
+        gradient += change * (s.all - excess * unit.all);
+        wall += change * (s.wall - excess * unit.wall);
+      }
+      return;
+    }
+  }
+}
+
+}  // namespace
+
 void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& in,
                         std::vector<Eigen::Vector3d>& gradient, std::vector<Eigen::Vector3d>& wall,
                         std::vector<double>& minimum) {
   const auto& kinds = *in.kinds;
-  const auto& p = *in.pressure;
   const int n = static_cast<int>(kinds.size());
   gradient.assign(n, Eigen::Vector3d::Zero());
   wall.assign(n, Eigen::Vector3d::Zero());
   if (form == Form::corrected_interior && in.unknown == nullptr) {
     throw std::invalid_argument("pressure_gradients: corrected_interior needs the unknowns");
   }
-  if (form == Form::minimum || form == Form::corrected || form == Form::corrected_interior) {
-    neighbourhood_minimum(in, minimum);
-  } else {
+  if (form == Form::symmetric || form == Form::symmetric_normal_wall) {
     minimum.assign(n, 0.0);
+  } else {
+    neighbourhood_minimum(in, minimum);
   }
   std::vector<Eigen::Vector3d> normals;
   if (form == Form::symmetric_normal_wall) wall_normals(in, normals);
-  // The corrected form returns n0/d C_i times its sum, so every form is scaled the same.
-  const double uncorrected = in.n0 / in.dimension;
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (!is_fluid(kinds[i])) continue;
-    switch (form) {
-      case Form::minimum: {  // Koshizuka & Oka (1996); seed 000 eq. (2) with p^_i
-        const PairSums s = pair_sums(in, i, [&](int j) { return p[j] - minimum[i]; });
-        gradient[i] = s.all;
-        wall[i] = s.wall;
-        break;
-      }
-      case Form::symmetric: {  // the pair form of SPH: antisymmetric in i, j
-        const PairSums s = pair_sums(in, i, [&](int j) { return p[i] + p[j]; });
-        gradient[i] = s.all;
-        wall[i] = s.wall;
-        break;
-      }
-      case Form::symmetric_normal_wall: {
-        const PairSums s = pair_sums(
-            in, i, [&](int j) { return p[i] + p[j]; }, &normals);
-        wall[i] = normal_wall_share(s, p[i]);
-        gradient[i] = s.fluid + wall[i];
-        break;
-      }
-      case Form::corrected: {  // Khayyer & Gotoh (2011) correction of the minimum form
-        const PairSums s = pair_sums(in, i, [&](int j) { return p[j] - minimum[i]; });
-        const Eigen::Matrix3d c = uncorrected * correction_matrix(in, i);
-        gradient[i] = c * s.all;
-        wall[i] = c * s.wall;
-        break;
-      }
-      case Form::corrected_interior: {  // the same, off the free surface only
-        const PairSums s = pair_sums(in, i, [&](int j) { return p[j] - minimum[i]; });
-        if (full_neighbourhood(in, i)) {
-          const Eigen::Matrix3d c = uncorrected * correction_matrix(in, i);
-          gradient[i] = c * s.all;
-          wall[i] = c * s.wall;
-        } else {
-          gradient[i] = s.all;
-          wall[i] = s.wall;
-        }
-        break;
-      }
-    }
+    if (is_fluid(kinds[i])) gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);
   }
 }
 

@@ -299,3 +299,126 @@ TEST(MpsPressureGradient, NormalWallGradientClosesAChannelsMomentumBalance) {
   EXPECT_LT((change - booked).norm(), 1e-12 * magnitude);
   EXPECT_GT(change.x(), 0.0);  // the drive accelerates the water
 }
+
+namespace {
+
+// The blended form's sums at every fluid particle, with the forms it blends.
+struct BlendedForms {
+  std::vector<Eigen::Vector3d> blended, split, minimum, corrected;
+};
+
+BlendedForms blended_forms(const GradientInput& in) {
+  BlendedForms f;
+  std::vector<Eigen::Vector3d> wall;
+  std::vector<double> work;
+  pressure_gradients(Form::corrected_blended, in, f.blended, wall, work);
+  pressure_gradients(Form::corrected_split, in, f.split, wall, work);
+  pressure_gradients(Form::minimum, in, f.minimum, wall, work);
+  pressure_gradients(Form::corrected, in, f.corrected, wall, work);
+  return f;
+}
+
+}  // namespace
+
+// corrected_blended: the weight is 0 on the free surface (the form is the minimum form there,
+// bit for bit), 1 in a full neighbourhood (the corrected form), rises with the depth in between,
+// where the form is (1 - w) times the minimum form plus w times the corrected one; among solids
+// (phi > 0) a thinner neighbourhood counts as full.
+TEST(MpsPressureGradient, BlendedWeightGoesFromSurfaceToInterior) {
+  const double l0 = 0.01, radius_over_l0 = 4.0;
+  const int columns = 24, rows = 14;
+  Block b = block(2, columns, rows, l0, 0.0, radius_over_l0 * l0, 1);
+  for (const auto& r : b.positions) b.pressure.push_back(1500.0 - 9810.0 * r.y() + 30.0 * r.x());
+  GradientInput in = b.input(2, radius_over_l0, l0);
+  in.surface_threshold = 0.8;  // so that the second row lies inside the ramp
+  auto at_depth = [&](int depth) { return (3 + rows - 1 - depth) * columns + columns / 2; };
+  std::vector<double> weights;
+  for (int depth = 0; depth < 6; ++depth) weights.push_back(correction_weight(in, at_depth(depth)));
+  EXPECT_EQ(weights[0], 0.0);
+  EXPECT_GT(weights[1], 0.05);
+  EXPECT_LT(weights[1], 0.95);
+  for (int depth = 3; depth < 6; ++depth) EXPECT_DOUBLE_EQ(weights[depth], 1.0);
+  for (int depth = 1; depth < 6; ++depth) EXPECT_GE(weights[depth], weights[depth - 1]);
+  const BlendedForms f = blended_forms(in);
+  EXPECT_EQ(f.blended[at_depth(0)], f.minimum[at_depth(0)]);
+  EXPECT_EQ(f.split[at_depth(0)], f.minimum[at_depth(0)]);
+  EXPECT_LT((f.blended[at_depth(4)] - f.corrected[at_depth(4)]).norm(),
+            1e-12 * f.corrected[at_depth(4)].norm());
+  const int mid = at_depth(1);
+  const Eigen::Vector3d mix = (1.0 - weights[1]) * f.minimum[mid] + weights[1] * f.corrected[mid];
+  EXPECT_LT((f.blended[mid] - mix).norm(), 1e-12 * mix.norm());
+  EXPECT_GT((f.corrected[mid] - f.minimum[mid]).norm(), 1e-3 * f.minimum[mid].norm());
+  // Among solids taking 40 % of the volume, the surface particle's 0.62 n0 is a full
+  // neighbourhood of (1 - 0.4) n0.
+  std::vector<double> phi(b.positions.size(), 0.4);
+  in.solid_fraction = &phi;
+  EXPECT_DOUBLE_EQ(correction_weight(in, at_depth(0)), 1.0);
+}
+
+// In a full neighbourhood the blended form is exact for a linear pressure, also on a sheared
+// lattice (centrally symmetric, so the p^_i part sums to zero, but anisotropic, so the plain
+// MPS gradient is not exact there).
+TEST(MpsPressureGradient, BlendedGradientOfLinearPressureIsExactInFullNeighbourhood) {
+  const double l0 = 0.01, radius_over_l0 = 3.1, shear = 0.3;
+  const int columns = 20, rows = 20;
+  Block b;
+  for (int y = 0; y < rows; ++y) {
+    for (int x = 0; x < columns; ++x) {
+      // 3 % closer than l0: a neighbourhood fuller than n0, whatever the shear does to it.
+      b.positions.emplace_back(0.97 * (x + shear * y) * l0, 0.97 * y * l0, 0.0);
+      b.kinds.push_back(ParticleKind::fluid);
+    }
+  }
+  const double radius = radius_over_l0 * l0;
+  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius), radius);
+  grid.build(b.positions);
+  b.list = grid.neighbours(b.positions, radius);
+  const Eigen::Vector3d slope(250.0, -9810.0, 0.0);
+  for (const auto& r : b.positions) b.pressure.push_back(4000.0 + slope.dot(r));
+  const GradientInput in = b.input(2, radius_over_l0, l0);
+  const int centre = (rows / 2) * columns + columns / 2;
+  ASSERT_EQ(correction_weight(in, centre), 1.0);
+  const BlendedForms f = blended_forms(in);
+  const double factor = gradient_factor(2, in.n0);
+  EXPECT_LT((factor * f.blended[centre] - slope).norm(), 1e-9 * slope.norm());
+  EXPECT_LT((factor * f.split[centre] - slope).norm(), 1e-9 * slope.norm());
+  EXPECT_GT((factor * f.minimum[centre] - slope).norm(), 1e-3 * slope.norm());
+}
+
+// corrected_split on a disordered block with a hydrostatic pressure: the minimum form plus
+// w_i (n0/d C_i - I) sum (p_j - p_i) F_ij, the correction of the Taylor part alone (the
+// corrected gradient with p_i as its own reference), p^_i's repulsion left as it is.
+TEST(MpsPressureGradient, SplitCorrectsTheTaylorPartOnly) {
+  const double l0 = 0.01, radius_over_l0 = 3.1;
+  const int columns = 16, rows = 12;
+  Block b = block(2, columns, rows, l0, 0.2, radius_over_l0 * l0, 9);
+  for (const auto& r : b.positions) b.pressure.push_back(1200.0 - 9810.0 * r.y());
+  const GradientInput in = b.input(2, radius_over_l0, l0);
+  const BlendedForms f = blended_forms(in);
+  const std::vector<Eigen::Vector3d> taylor = corrected_gradient(in, b.pressure, b.pressure);
+  const double factor = gradient_factor(2, in.n0);
+  // The uncorrected Taylor part d/n0 sum (p_j - p_i) F_ij over the pressure-carrying partners.
+  auto plain = [&](int i) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int k = b.list.begin(i); k < b.list.end(i); ++k) {
+      const int j = b.list.index[k];
+      if (b.kinds[j] == ParticleKind::dummy || b.list.distance[k] >= in.radius) continue;
+      sum += gradient_pair_term(b.pressure[j] - b.pressure[i], b.list.distance[k], in.radius,
+                                b.positions[j] - b.positions[i]);
+    }
+    return Eigen::Vector3d(factor * sum);
+  };
+  int partial = 0, corrected = 0;
+  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
+    if (b.kinds[i] != ParticleKind::fluid) continue;
+    const double w = correction_weight(in, static_cast<int>(i));
+    // corrected_gradient is C_i sum, gradient() is d/n0 sum: both in Pa/m.
+    const Eigen::Vector3d expected =
+        f.minimum[i] + w * (taylor[i] - plain(static_cast<int>(i))) / factor;
+    EXPECT_LT((f.split[i] - expected).norm(), 1e-9 * f.minimum[i].norm()) << "particle " << i;
+    partial += w > 0.0 && w < 1.0;
+    corrected += w == 1.0;
+  }
+  EXPECT_GT(partial, 0);
+  EXPECT_GT(corrected, 0);
+}

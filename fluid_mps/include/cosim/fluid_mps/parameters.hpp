@@ -145,13 +145,25 @@ struct MpsParameters {
   //             minimum form elsewhere: near the surface the missing neighbours shrink the
   //             moment matrix and C_i amplifies the one-sided p^_i part (what put the corrected
   //             still water 17 % low and its dam-break front 14 % ahead).
+  //  corrected_blended: the minimum form times (1 - w_i) I + w_i n0/d C_i, the weight w_i a
+  //             smoothstep of how full i's neighbourhood is (n_i / n0 at the gradient radius, from
+  //             0 at the surface threshold beta to 1 at n0): the correction matrix in the
+  //             interior, the minimum form on the surface, no switch in between (renormalised
+  //             gradients blended with the plain one: Oger et al. 2007; Khayyer & Gotoh 2011).
+  //  corrected_split: the minimum form split as sum (p_j - p_i) F + (p_i - p^_i) sum F (F_ij =
+  //             r_ij w / r^2): the blended matrix of corrected_blended on the first part (the
+  //             Taylor difference, which the correction makes exact for a linear p), the second
+  //             (the repulsion p^_i adds) uncorrected, so the inverse cannot amplify it where
+  //             the neighbourhood is one-sided.
   // pressure_gradient.hpp has the operators; docs/validation.md (rigid_canopy) what each gave.
   enum class GradientForm {
     minimum,
     symmetric,
     symmetric_normal_wall,
     corrected,
-    corrected_interior
+    corrected_interior,
+    corrected_blended,
+    corrected_split
   };
   GradientForm gradient_form = GradientForm::minimum;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
@@ -173,12 +185,14 @@ inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 4> kPr
      {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky}}};
 inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
     {{"mixed", MpsParameters::SourceTerm::mixed}, {"density", MpsParameters::SourceTerm::density}}};
-inline constexpr scenario::Choices<MpsParameters::GradientForm, 5> kGradientForms{
+inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForms{
     {{"minimum", MpsParameters::GradientForm::minimum},
      {"symmetric", MpsParameters::GradientForm::symmetric},
      {"symmetric_normal_wall", MpsParameters::GradientForm::symmetric_normal_wall},
      {"corrected", MpsParameters::GradientForm::corrected},
-     {"corrected_interior", MpsParameters::GradientForm::corrected_interior}}};
+     {"corrected_interior", MpsParameters::GradientForm::corrected_interior},
+     {"corrected_blended", MpsParameters::GradientForm::corrected_blended},
+     {"corrected_split", MpsParameters::GradientForm::corrected_split}}};
 
 // The keys of `participants.fluid_mps` that are MpsParameters, each declared once
 // (cosim/scenario/parameters.hpp): the scenario parser, validate_parameters() and `cosim keys`
@@ -231,8 +245,10 @@ void visit_parameters(P& p, V& v) {
     p.runaway_speed);
   v(Key("pressure_gradient")
         .doc("minimum (Koshizuka-Oka), symmetric (momentum-conserving), symmetric_normal_wall "
-             "(symmetric, smooth straight walls), corrected (correction matrix) or "
-             "corrected_interior (correction matrix off the free surface only)"),
+             "(symmetric, smooth straight walls), corrected (correction matrix), "
+             "corrected_interior (correction matrix off the free surface only), "
+             "corrected_blended (correction matrix blended by how full the neighbourhood is) or "
+             "corrected_split (the blend on the Taylor part only, p^_i's repulsion uncorrected)"),
     p.gradient_form, kGradientForms);
   v(Key("shifting_coefficient")
         .in(Range::between(0.0, 10.0))

@@ -28,6 +28,11 @@ struct GradientInput {
   const PeriodicBoundary* periodic = nullptr;
   // Pressure unknown of each particle, -1 on the free surface (corrected_interior only).
   const std::vector<int>* unknown = nullptr;
+  // corrected_blended: the surface threshold beta (the blend weight is 0 at n_i = beta n0) and
+  // the solid fraction phi of each particle (a neighbourhood among solids is full at
+  // (1 - phi) n0; nullptr: no solids).
+  double surface_threshold = 0.97;
+  const std::vector<double>* solid_fraction = nullptr;
 
   std::int64_t begin(int i) const { return neighbours->offset[i]; }
   std::int64_t end(int i) const { return row_end ? (*row_end)[i] : neighbours->offset[i + 1]; }
@@ -48,6 +53,14 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
 // neighbourhood is too thin to invert (a splash particle with one or two neighbours) it falls
 // back to d/n0 I, the uncorrected operator.
 Eigen::Matrix3d correction_matrix(const GradientInput& in, int i);
+
+// Weight w_i of the correction matrix in corrected_blended: t = (n_i / ((1 - phi_i) n0) - beta)
+// / (1 - beta) clamped to [0, 1], w_i = t^2 (3 - 2 t) (a smoothstep, flat at both ends), with n_i
+// = sum_j w(r_ij) over every neighbour within the gradient radius but inactive ones (walls and
+// dummies count: a wall completes the neighbourhood, only a free surface leaves it empty). n_i is
+// the trace of the moment matrix, so it measures how full the neighbourhood is regardless of
+// how its particles are arranged. 0 on a flat free surface (n_i about 0.6 n0), 1 in the interior.
+double correction_weight(const GradientInput& in, int i);
 
 // The corrected gradient of a field with reference values: C_i sum_j (phi_j - reference_i)
 // r_ij / |r_ij|^2 w_ij. With reference_i = phi_i it recovers the gradient of a linear field
