@@ -46,6 +46,7 @@ AccelerationOptions acceleration_options(const scenario::ImplicitSettings& setti
   options.relaxation = settings.relaxation;
   options.reuse_windows = settings.reuse_windows;
   options.filter = settings.filter;
+  options.max_step = settings.max_step;
   return options;
 }
 }  // namespace
@@ -251,6 +252,10 @@ double Coupler::run_implicit_windows(ProcessGroup& processes, RunResult& result)
     result.windows_completed = completed;
     previous_dt = dt;
     bus_->forget_fields_before(index - 2);
+  }
+  if (accelerator.bounded_steps() > 0) {
+    spdlog::info("coupling.implicit.max_step shortened {} accelerated updates",
+                 accelerator.bounded_steps());
   }
   await_checkpoints(processes, completed, false);
   book_overhead(result, window_one_started, completed, serial);
