@@ -63,8 +63,8 @@ Eigen::VectorXd Accelerator::next(const Eigen::VectorXd& x, const Eigen::VectorX
       next = iqn_step(x, h, r);
       break;
   }
-  const bool bounded = options_.kind == AccelerationKind::aitken ||
-                       options_.kind == AccelerationKind::iqn_ils;
+  const bool bounded =
+      options_.kind == AccelerationKind::aitken || options_.kind == AccelerationKind::iqn_ils;
   if (bounded && options_.max_step > 0.0) {
     const double step = (next - x).norm(), radius = options_.max_step * r.norm();
     if (step > radius) {

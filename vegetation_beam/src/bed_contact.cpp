@@ -22,8 +22,7 @@ void PlantField::setup_bed_contact(Plant& plant, const PlantSpec& spec, double l
   if (!p.bed_contact) return;
   // The bed is normal to gravity; without gravity it is normal to the plant's direction.
   plant.bed_normal = p.gravity.norm() > 0 ? (-p.gravity.normalized()).eval() : spec.direction;
-  plant.bed_height =
-      plant.bed_normal.dot(spec.base) - p.bed_below_base + 0.5 * spec.thickness;
+  plant.bed_height = plant.bed_normal.dot(spec.base) - p.bed_below_base + 0.5 * spec.thickness;
   // The spring must be resolved by the sub-step: the trapezoidal rule conserves energy only for
   // forces that are smooth over a step, and a node switching in and out of an unresolved stiff
   // contact gains energy (measured: a blade pressed flat at safety_factor 10 with k = EA / l0

@@ -45,13 +45,13 @@ struct BeamParameters {
   // Bed contact (bed_contact.cpp): a frictionless penalty spring-dashpot keeps the nodes above a
   // plane normal to gravity, bed_below_base under each plant's base; off by default.
   bool bed_contact = false;
-  double bed_stiffness = 0;   // N/m per node; <= 0: the plant's axial link stiffness EA/l0
-  double bed_below_base = 0;  // m, from the base down to the bed plane
-  bool rigid = false;                  // nodes never move, drag is still computed
-  double safety_factor = 0.5;          // multiplies the spring-mass step limit
-  int max_substeps = 100000;           // per window; more throws StabilityError
-  double newton_tolerance = 1e-10;     // on the largest position correction, in link lengths
-  int max_newton_iterations = 20;      // per attempt; a sub-step makes at most two (see advance)
+  double bed_stiffness = 0;         // N/m per node; <= 0: EA / l0 / max(1, safety_factor)^2
+  double bed_below_base = 0;        // m, from the base down to the bed plane
+  bool rigid = false;               // nodes never move, drag is still computed
+  double safety_factor = 0.5;       // multiplies the spring-mass step limit
+  int max_substeps = 100000;        // per window; more throws StabilityError
+  double newton_tolerance = 1e-10;  // on the largest position correction, in link lengths
+  int max_newton_iterations = 20;   // per attempt; a sub-step makes at most two (see advance)
 };
 
 // The keys of one `plants` entry (count and spacing aside), declared once for the parser, the
@@ -133,7 +133,7 @@ void visit_parameters(P& p, V& v) {
         .unit("N/m")
         .in(Range::non_negative())
         .only_with(p.bed_contact, "bed_contact: true")
-        .doc("per node; 0: the plant's EA / l0"),
+        .doc("per node; 0: EA / l0 / max(1, safety_factor)^2 (resolved by the sub-step)"),
     p.bed_stiffness);
   v(Key("bed_below_base")
         .unit("m")
@@ -288,7 +288,7 @@ class PlantField {
     // half the thickness); bed_spring 0 means no bed contact.
     Eigen::Vector3d bed_normal{0, 0, 1};
     double bed_height = 0, bed_spring = 0, bed_damper = 0;
-    double reach_limit = 0;     // nodes farther from the base have escaped
+    double reach_limit = 0;  // nodes farther from the base have escaped
   };
 
   // Outcome of one Newton attempt of a sub-step; on failure the plant and node (local index)
