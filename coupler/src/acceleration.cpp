@@ -63,6 +63,15 @@ Eigen::VectorXd Accelerator::next(const Eigen::VectorXd& x, const Eigen::VectorX
       next = iqn_step(x, h, r);
       break;
   }
+  const bool bounded =
+      options_.kind == AccelerationKind::aitken || options_.kind == AccelerationKind::iqn_ils;
+  if (bounded && options_.max_step > 0.0) {
+    const double step = (next - x).norm(), radius = options_.max_step * r.norm();
+    if (step > radius) {
+      next = x + (radius / step) * (next - x);
+      ++bounded_;
+    }
+  }
   previous_r_ = r;
   previous_h_ = h;
   ++iteration_;

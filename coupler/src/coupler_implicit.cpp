@@ -46,6 +46,7 @@ AccelerationOptions acceleration_options(const scenario::ImplicitSettings& setti
   options.relaxation = settings.relaxation;
   options.reuse_windows = settings.reuse_windows;
   options.filter = settings.filter;
+  options.max_step = settings.max_step;
   return options;
 }
 }  // namespace
@@ -96,6 +97,10 @@ class Coupler::ImplicitWindows {
       result_.windows_completed = completed;
       previous_dt = dt;
       c_.bus_->forget_fields_before(index - 2);
+    }
+    if (accelerator_.bounded_steps() > 0) {
+      spdlog::info("coupling.implicit.max_step shortened {} accelerated updates",
+                   accelerator_.bounded_steps());
     }
     c_.await_checkpoints(processes_, completed, false);
     c_.book_overhead(result_, window_one_started, completed, serial_);

@@ -65,6 +65,7 @@ PlantField::PlantField(std::vector<PlantSpec> plants, BeamParameters parameters)
     const double wave_speed = std::sqrt(spec.axial_stiffness / (mass_density * area));
     plant.speed_limit = wave_speed + 10 * std::sqrt(p.gravity.norm() * spec.length);
     plant.reach_limit = 1.5 * spec.length;
+    setup_bed_contact(plant, spec, link_mass);
     plants_.push_back(plant);
 
     for (int i = 0; i <= spec.links; ++i) {
@@ -147,7 +148,20 @@ std::pair<double, std::string> PlantField::step_limit() const {
           " N/m)";
     }
   }
-  return {parameters_.safety_factor * best, reason};
+  best *= parameters_.safety_factor;
+  // The bed's spring-mass period is a limit whatever safety_factor (bed_contact.cpp).
+  for (int index = 0; index < plant_count(); ++index) {
+    const Plant& plant = plants_[index];
+    if (plant.bed_spring <= 0) continue;
+    const double link_mass = node_mass_[plant.first + 1] * (plant.links == 1 ? 2.0 : 1.0);
+    const double bed = std::sqrt(link_mass / plant.bed_spring);
+    if (bed < best) {
+      best = bed;
+      reason = "bed contact spring-mass period of plant " + std::to_string(index) +
+               " (bed_stiffness = " + std::to_string(plant.bed_spring) + " N/m)";
+    }
+  }
+  return {best, reason};
 }
 
 double PlantField::stable_substep() const {
@@ -277,6 +291,8 @@ void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector
   } else {
     for (int i = 0; i <= links; ++i) drag[first + i].setZero();
   }
+
+  add_bed_contact(plant, x, v, force, jacobian, stiffness_weight, damping_weight);
 
   if (include_contact && plant_in_contact_[plant_index]) {
     for (int i = 1; i <= links; ++i) {

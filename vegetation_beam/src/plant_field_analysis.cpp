@@ -182,7 +182,7 @@ double PlantField::elastic_energy() const {
       if (overlap > 0) energy += 0.5 * contact_stiffness_ * overlap * overlap;
     }
   }
-  return energy;
+  return energy + bed_energy();
 }
 
 double PlantField::potential_energy() const {

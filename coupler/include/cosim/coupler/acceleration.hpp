@@ -37,6 +37,13 @@ struct AccelerationOptions {
   double filter = 1e-10;
   // IQN-ILS: at most this many columns (the oldest go first); 0: as many as the vector length.
   int max_columns = 0;
+  // Aitken, IQN-ILS: a bounded step (0: unbounded). An update x_next - x longer than max_step
+  // times the residual |r| = |H(x) - x| is shortened to that length along its direction: a trust
+  // region on the quasi-Newton step (J. Nocedal and S. J. Wright, Numerical Optimization, 2nd
+  // ed., Springer 2006, ch. 4: the step is bounded by a radius), the radius set by the plain
+  // iteration's step, so that a least-squares fit to noisy differences (a solver whose answer is
+  // not smooth in its input) cannot send the solvers an input far from any they answered.
+  double max_step = 0.0;
 };
 
 class Accelerator {
@@ -54,6 +61,7 @@ class Accelerator {
   // IQN-ILS: columns in use, and columns dropped by the filter so far.
   int columns() const;
   int64_t filtered_columns() const { return filtered_; }
+  int64_t bounded_steps() const { return bounded_; }  // updates shortened by max_step so far
   double aitken_factor() const { return omega_; }
 
  private:
@@ -70,6 +78,7 @@ class Accelerator {
   std::deque<Eigen::VectorXd> w_;
   std::deque<std::pair<std::vector<Eigen::VectorXd>, std::vector<Eigen::VectorXd>>> kept_;
   int64_t filtered_ = 0;
+  int64_t bounded_ = 0;
 };
 
 // The name a scenario gives a kind ("none", "constant", "aitken", "iqn-ils").

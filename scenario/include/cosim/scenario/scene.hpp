@@ -41,6 +41,7 @@ struct ImplicitSettings {
   double relaxation = 0.5;
   int reuse_windows = 0;
   double filter = 1e-10;
+  double max_step = 0;  // 0: unbounded
 };
 
 template <class P, class V>
@@ -80,6 +81,11 @@ void visit_parameters(P& p, V& v) {
         .in(Range::between(0, 100))
         .doc("iqn-ils: windows whose columns are kept for the next windows"),
     p.reuse_windows);
+  v(Key("max_step")
+        .in(Range::non_negative())
+        .doc("aitken, iqn-ils: an update x_next - x longer than this times the residual |H(x) - x| "
+             "(in the scaled fields) is shortened to it, along its direction (0: unbounded)"),
+    p.max_step);
   v(Key("filter")
         .in(Range::between(0.0, 1.0))
         .doc("iqn-ils: drop a column whose part orthogonal to newer ones is below this times its "

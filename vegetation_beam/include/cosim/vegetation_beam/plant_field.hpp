@@ -41,12 +41,17 @@ struct BeamParameters {
   double bending_damping_ratio = 0.1;  // alpha_m of eq. 15, fraction of critical (0: undamped)
   bool contact = true;
   double contact_stiffness = 0;        // N/m; <= 0: the smallest axial link stiffness EA/l0
-  double contact_damping_ratio = 0.2;  // fraction of critical for a node pair
-  bool rigid = false;                  // nodes never move, drag is still computed
-  double safety_factor = 0.5;          // multiplies the spring-mass step limit
-  int max_substeps = 100000;           // per window; more throws StabilityError
-  double newton_tolerance = 1e-10;     // on the largest position correction, in link lengths
-  int max_newton_iterations = 20;      // per attempt; a sub-step makes at most two (see advance)
+  double contact_damping_ratio = 0.2;  // fraction of critical for a node pair (and the bed)
+  // Bed contact (bed_contact.cpp): a frictionless penalty spring-dashpot keeps the nodes above a
+  // plane normal to gravity, bed_below_base under each plant's base; off by default.
+  bool bed_contact = false;
+  double bed_stiffness = 0;         // N/m per node; <= 0: EA / l0 / max(1, safety_factor)^2
+  double bed_below_base = 0;        // m, from the base down to the bed plane
+  bool rigid = false;               // nodes never move, drag is still computed
+  double safety_factor = 0.5;       // multiplies the spring-mass step limit
+  int max_substeps = 100000;        // per window; more throws StabilityError
+  double newton_tolerance = 1e-10;  // on the largest position correction, in link lengths
+  int max_newton_iterations = 20;   // per attempt; a sub-step makes at most two (see advance)
 };
 
 // The keys of one `plants` entry (count and spacing aside), declared once for the parser, the
@@ -122,6 +127,20 @@ void visit_parameters(P& p, V& v) {
   v(Key("contact").doc("plant-to-plant contact"), p.contact);
   v(Key("contact_stiffness").unit("N/m").in(Range::non_negative()).doc("0: the smallest EA / l0"),
     p.contact_stiffness);
+  v(Key("bed_contact").doc("nodes stay above the bed plane (penalty spring-dashpot)"),
+    p.bed_contact);
+  v(Key("bed_stiffness")
+        .unit("N/m")
+        .in(Range::non_negative())
+        .only_with(p.bed_contact, "bed_contact: true")
+        .doc("per node; 0: EA / l0 / max(1, safety_factor)^2 (resolved by the sub-step)"),
+    p.bed_stiffness);
+  v(Key("bed_below_base")
+        .unit("m")
+        .in(Range::non_negative())
+        .only_with(p.bed_contact, "bed_contact: true")
+        .doc("bed plane (normal to gravity) this far below each base"),
+    p.bed_below_base);
   v(Key("rigid").doc("nodes never move; drag is still computed"), p.rigid);
   // Newmark average acceleration is unconditionally stable: factors above 1 trade axial-strain
   // accuracy for speed (seed 000: 10 to 100 beam steps per fluid step suffice).
@@ -265,7 +284,11 @@ class PlantField {
     double contact_radius = 0;  // half the width
     Eigen::Vector3d ghost;      // fixed node mirrored below the base: clamps the rotation
     double speed_limit = 0;     // faster nodes mean runaway energy
-    double reach_limit = 0;     // nodes farther from the base have escaped
+    // Bed contact: a node is in contact while bed_normal . x < bed_height (the bed plane plus
+    // half the thickness); bed_spring 0 means no bed contact.
+    Eigen::Vector3d bed_normal{0, 0, 1};
+    double bed_height = 0, bed_spring = 0, bed_damper = 0;
+    double reach_limit = 0;  // nodes farther from the base have escaped
   };
 
   // Outcome of one Newton attempt of a sub-step; on failure the plant and node (local index)
@@ -316,6 +339,14 @@ class PlantField {
                       std::vector<Eigen::Vector3d>& force, std::vector<Eigen::Vector3d>& drag,
                       BandedMatrix* jacobian, double stiffness_weight, double damping_weight,
                       bool drag_stiffness = false) const;
+  // Adds the bed's normal force on the plant's free nodes (bed_contact.cpp) to `force`, and its
+  // stiffness and damping to the Jacobian, for the nodes below the bed at x.
+  void add_bed_contact(const Plant& plant, const std::vector<Eigen::Vector3d>& x,
+                       const std::vector<Eigen::Vector3d>& v, std::vector<Eigen::Vector3d>& force,
+                       BandedMatrix* jacobian, double stiffness_weight,
+                       double damping_weight) const;
+  void setup_bed_contact(Plant& plant, const PlantSpec& spec, double link_mass) const;
+  double bed_energy() const;  // of the bed springs at the current positions
   // Solves jacobian * correction = -residual for one plant (factorising first if asked) and
   // applies it (not when the factorisation fails).
   Correction apply_newton_correction(int plant, BandedMatrix& jacobian,
