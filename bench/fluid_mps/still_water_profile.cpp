@@ -4,7 +4,8 @@
 // tank's axis, each against rho g (H - z) at the particles' mean height, with the floor's wall
 // pressure, the 1.5 l0 probes of the hydrostatic reference and the settling of the mean pressure
 // in time. docs/validation.md (still_water_3d) has what it found.
-//   still_water_profile key=value ...   (keys below, e.g. l0=0.0125 length=0.1 average_from=1)
+//   still_water_profile key=value ...   (keys below, e.g. l0=0.0125 length=0.1 average_from=1;
+//   lattice=1 the fcc start of MpsParameters::FillLattice, whose layers the profile bins by)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
