@@ -24,9 +24,9 @@ int cells(double length, double l0) {
 // (h_d = L_d / n_d, n_d = round(L_d / h), L_d the water's largest coordinate, or the tank's size
 // where there is no water), so that a water box from the tank's walls, as the still-water tank's
 // and the dam-break column's, keeps its size (the tank's far walls fall on the nearest layer
-// instead), the centres (i, j, k) with i + j + k even the
-// particles (half the cells: 2 h^3 = l0^3 per particle unstretched). Wall and dummy layers keep
-// the thickness of the cubic lattice's: round(layers l0 / h) fcc layers.
+// instead), the centres (i, j, k) with i + j + k even the particles (half the cells: 2 h^3 = l0^3
+// per particle unstretched). Wall and dummy layers keep the thickness of the cubic lattice's:
+// round(layers l0 / h) fcc layers.
 struct FillGrid {
   Eigen::Vector3d spacing;
   int wall_layers = 0, layers = 0;  // solved walls; walls and dummies

@@ -169,8 +169,8 @@ struct MpsParameters {
   enum class FillLattice { cubic, fcc };
   FillLattice fill_lattice = FillLattice::cubic;
   // Set by the 3D scene builders, not a key: how much the fcc fill's layer spacing along x, y, z
-  // is stretched (>= about 0.96, <= 1.04) so that a whole number of layers fits the tank; n0,
-  // lambda and the particle mass (rho times the volume per particle) are taken on that lattice.
+  // is stretched (by at most 1/(2n) for n layers) for whole layers to fit the water; n0, lambda
+  // and the particle mass (rho times the volume per particle) are taken on that lattice.
   Eigen::Vector3d fill_stretch = Eigen::Vector3d::Ones();
   // Particles outside are 'escaped'. Empty box: the bounding box of the initial particles grown
   // by 20 l0 on each side.
