@@ -4,7 +4,8 @@
 // tank's axis, each against rho g (H - z) at the particles' mean height, with the floor's wall
 // pressure, the 1.5 l0 probes of the hydrostatic reference and the settling of the mean pressure
 // in time. docs/validation.md (still_water_3d) has what it found.
-//   still_water_profile key=value ...   (keys below, e.g. l0=0.0125 length=0.1 average_from=1)
+//   still_water_profile key=value ...   (keys below, e.g. l0=0.0125 length=0.1 average_from=1;
+//   lattice=1 the fcc start of MpsParameters::FillLattice, whose layers the profile bins by)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <cstdlib>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cosim/fluid_mps/fluid_system.hpp"
@@ -29,7 +31,7 @@ struct Options {
       {"laplacian", 3.1}, {"density_radius", 2.1}, {"beta", 0.97},        {"walls", 2},
       {"dummies", 2},     {"margin", 3.1},         {"probe_radius", 1.5}, {"collision", 1.0},
       {"mixed", 0},       {"gamma", 0.2},          {"form", 0},           {"probe_scale", 1.0},
-      {"shifting", 0.0}};
+      {"shifting", 0.0},  {"lattice", 0}};  // lattice 0: cubic, 1: fcc
   double operator[](const std::string& key) const { return values.at(key); }
 };
 
@@ -109,20 +111,23 @@ MpsParameters parameters_of(const Options& o) {
   if (o["mixed"] > 0) p.source_term = MpsParameters::SourceTerm::mixed;
   p.shifting_coefficient = o["shifting"];
   p.gradient_form = static_cast<MpsParameters::GradientForm>(static_cast<int>(o["form"]));
+  p.fill_lattice = static_cast<MpsParameters::FillLattice>(static_cast<int>(o["lattice"]));
   return p;
 }
 
 // The time series (every 0.2 s) and the time means from average_from on.
 class Profile {
  public:
-  explicit Profile(const Options& o)
+  // layer: the spacing of the fill's horizontal layers (l0 cubic, the fitted h_z of fcc).
+  Profile(const Options& o, double layer)
       : l0_(o["l0"]),
+        layer_(layer),
         length_(o["length"]),
         width_(o["width"]),
         depth_(o["depth"]),
         margin_(o["margin"] * o["l0"]),
         probe_radius_(o["probe_radius"] * o["l0"]),
-        layers_(static_cast<std::size_t>(std::lround(o["depth"] / o["l0"])) + 2) {
+        layers_(static_cast<std::size_t>(std::lround(o["depth"] / layer)) + 2) {
     const double scale = o["probe_scale"];  // probes at 0.025, 0.05, 0.075 m times this
     probe_depths_ = {0.025 * scale, 0.05 * scale, 0.075 * scale};
     std::printf(
@@ -169,13 +174,13 @@ class Profile {
       const bool core = xi.x() > margin_ && xi.x() < length_ - margin_ && xi.y() > margin_ &&
                         xi.y() < width_ - margin_;
       if (system.kinds()[i] == ParticleKind::wall) {
-        if (core && std::abs(xi.z() + 0.5 * l0_) < 0.25 * l0_) {  // the floor's top layer
+        if (core && std::abs(xi.z() + 0.5 * layer_) < 0.25 * layer_) {  // the floor's top layer
           floor_sum_ += pr[i];
           ++floor_n_;
         }
         continue;
       }
-      const int k = static_cast<int>(std::floor(xi.z() / l0_));
+      const int k = static_cast<int>(std::floor(xi.z() / layer_));
       if (system.kinds()[i] != ParticleKind::fluid || k < 0 || k >= int(layers_.size())) continue;
       Layer& layer = layers_[k];
       add(layer.p_all, layer.z_all, layer.n_all, pr[i], xi.z());
@@ -210,8 +215,8 @@ class Profile {
                   L.n_core / samples_, ratio(L.p_core, L.z_core, L.n_core), L.n_axis / samples_,
                   ratio(L.p_axis, L.z_axis, L.n_axis), L.p_all / L.n_all);
     }
-    std::printf("# floor wall (top layer, core) p / rho g (H + l0/2) = %.4f\n",
-                floor_sum_ / floor_n_ / (rho_g_ * (depth_ + 0.5 * l0_)));
+    std::printf("# floor wall (top layer, core) p / rho g (H + layer/2) = %.4f\n",
+                floor_sum_ / floor_n_ / (rho_g_ * (depth_ + 0.5 * layer_)));
     for (std::size_t k = 0; k < probe_depths_.size(); ++k) {
       const double expected = rho_g_ * probe_depths_[k], mean = probe_sum_[k] / samples_;
       std::printf("# probe depth %.3f: %.1f Pa (%+.2f %%), %.1f particles\n", probe_depths_[k],
@@ -228,7 +233,7 @@ class Profile {
   struct Window {
     double start = 0, p = 0, expected = 0, kinetic = 0, samples = 0, z = 0, n = 0, top = 0;
   };
-  double l0_, length_, width_, depth_, margin_, probe_radius_;
+  double l0_, layer_, length_, width_, depth_, margin_, probe_radius_;
   double rho_g_ = 1000.0 * 9.81;
   std::vector<Layer> layers_;
   std::vector<double> probe_depths_, probe_sum_ = std::vector<double>(3, 0.0),
@@ -243,10 +248,18 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   const Options o = parse(argc, argv);
   MpsParameters p = parameters_of(o);
-  FluidSystem system(
-      p, still_water_tank_3d(p, o["length"], o["width"], o["depth"], o["height"],
-                             static_cast<int>(o["walls"]), static_cast<int>(o["dummies"])));
-  Profile profile(o);
+  // The builder sets p's domain and fill stretch before the system takes p.
+  ParticleSet particles =
+      still_water_tank_3d(p, o["length"], o["width"], o["depth"], o["height"],
+                          static_cast<int>(o["walls"]), static_cast<int>(o["dummies"]));
+  FluidSystem system(p, std::move(particles));
+  const double layer = p.fill_lattice == MpsParameters::FillLattice::fcc
+                           ? fcc_layer_spacing_over_l0() * o["l0"] * p.fill_stretch.z()
+                           : o["l0"];
+  std::printf("# particles %d, n0 %.6f (density radius), fill stretch %.4f %.4f %.4f\n",
+              system.particle_count(), system.n0_density(), p.fill_stretch.x(), p.fill_stretch.y(),
+              p.fill_stretch.z());
+  Profile profile(o, layer);
   const auto start = std::chrono::steady_clock::now();
   while (system.time() < o["duration"] - 1e-9) {
     system.step(system.stable_dt());

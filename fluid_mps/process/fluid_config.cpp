@@ -302,6 +302,14 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
   } else {
     forbid(scene, "chain_state", "kind: periodic_pool");
   }
+  if (config.parameters.fill_lattice == MpsParameters::FillLattice::fcc) {
+    if (config.parameters.dimension != 3) {
+      section.fail("fill_lattice", "fcc is a 3D lattice (dimension: 3)");
+    }
+    if (config.scene.kind == "flume") {  // its walls must stay on the debris' whole cells l0
+      section.fail("fill_lattice", "fcc fits its layers to the water; kind: flume needs cubic");
+    }
+  }
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;
   const double particles = estimated_particles(config.scene, config.parameters);
   scenario::MemoryBudget("fluid_mps")

@@ -51,8 +51,7 @@ std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
   const auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
   // Particles of a full lattice centred on a particle, within the radius (itself included).
   const double full =
-      lattice_sums(parameters_.dimension, radius / parameters_.particle_spacing).neighbour_count +
-      1.0;
+      fill_lattice_sums(parameters_, radius / parameters_.particle_spacing).neighbour_count + 1.0;
   std::vector<Eigen::Vector3d> velocity(points.size(), Eigen::Vector3d::Zero());
   if (water_fraction) water_fraction->assign(points.size(), 0.0);
   for (std::size_t q = 0; q < points.size(); ++q) {

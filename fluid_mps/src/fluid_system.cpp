@@ -23,6 +23,23 @@ void validate_parameters(const MpsParameters& p) {
         "MpsParameters", "periodic",
         "the period must be at least three times the largest influence radius");
   }
+  if (p.fill_lattice == MpsParameters::FillLattice::fcc && p.dimension != 3) {
+    throw scenario::ParameterError("MpsParameters", "fill_lattice",
+                                   "fcc is a 3D lattice (dimension = 3)");
+  }
+}
+
+LatticeSums fill_lattice_sums(const MpsParameters& p, double radius_over_l0) {
+  if (p.fill_lattice == MpsParameters::FillLattice::fcc) {
+    return fcc_lattice_sums(radius_over_l0, p.fill_stretch);
+  }
+  return lattice_sums(p.dimension, radius_over_l0);
+}
+
+double fill_volume_per_particle(const MpsParameters& p) {
+  const double cell = std::pow(p.particle_spacing, p.dimension);
+  if (p.fill_lattice == MpsParameters::FillLattice::fcc) return cell * p.fill_stretch.prod();
+  return cell;
 }
 
 FluidSystem::FluidSystem(MpsParameters parameters, ParticleSet particles)
@@ -57,11 +74,11 @@ void FluidSystem::initialise() {
   }
   const MpsParameters& p = parameters_;
   const double l0 = p.particle_spacing;
-  density_sums_ = lattice_sums(p.dimension, p.radius_density_over_l0);
-  gradient_sums_ = lattice_sums(p.dimension, p.radius_gradient_over_l0);
-  laplacian_sums_ = lattice_sums(p.dimension, p.radius_laplacian_over_l0);
-  hierarchy_sums_ = lattice_sums(p.dimension, hierarchy_radius() / l0);
-  particle_mass_ = p.density * std::pow(l0, p.dimension);
+  density_sums_ = fill_lattice_sums(p, p.radius_density_over_l0);
+  gradient_sums_ = fill_lattice_sums(p, p.radius_gradient_over_l0);
+  laplacian_sums_ = fill_lattice_sums(p, p.radius_laplacian_over_l0);
+  hierarchy_sums_ = fill_lattice_sums(p, hierarchy_radius() / l0);
+  particle_mass_ = p.density * fill_volume_per_particle(p);
   external_accelerations_.assign(n, Eigen::Vector3d::Zero());
 
   domain_box_ = p.domain;

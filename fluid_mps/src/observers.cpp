@@ -62,7 +62,7 @@ double discharge_through_line(const FluidSystem& system, double x, double y_min,
     if (std::abs(dx) >= 0.5 * band || r.y() < y_min || r.y() > y_max) continue;
     sum += system.velocities()[i].x();
   }
-  return sum * std::pow(l0, p.dimension) / band;
+  return sum * fill_volume_per_particle(p) / band;
 }
 
 double water_level(const FluidSystem& system, double x0, double x1) {
@@ -100,7 +100,7 @@ double water_depth_at(const FluidSystem& system, double x, double y, double half
     if (wx == 0.0) continue;
     weight += p.dimension == 3 ? wx * tent(r.y() - y) : wx;
   }
-  return weight * std::pow(p.particle_spacing, p.dimension);
+  return weight * fill_volume_per_particle(p);
 }
 
 GaugeLine::GaugeLine(double x, double y_min, double y_max) : x_(x), y_min_(y_min), y_max_(y_max) {}
@@ -130,7 +130,7 @@ void GaugeLine::update(const FluidSystem& system) {
 
 double GaugeLine::volume(const FluidSystem& system) const {
   const MpsParameters& p = system.parameters();
-  return static_cast<double>(net_) * std::pow(p.particle_spacing, p.dimension);
+  return static_cast<double>(net_) * fill_volume_per_particle(p);
 }
 
 }  // namespace cosim::mps

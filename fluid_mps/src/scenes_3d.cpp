@@ -1,5 +1,6 @@
 // 3D scene builders (scenes.hpp): a tank of wall and dummy particles with solid box obstacles,
 // or closed triangle surfaces (STL), filled with water boxes, on one lattice of cells l0 wide.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <deque>
@@ -8,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "cosim/fluid_mps/kernels.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 
 namespace cosim::mps {
@@ -17,14 +19,46 @@ int cells(double length, double l0) {
   return static_cast<int>(std::lround(length / l0));
 }
 
+// The grid of the fill: cubic, cells l0 wide, every cell centre a particle; fcc, cells of the
+// (100) layer spacing h = 2^(-1/3) l0 fitted along each axis to the far end of the water, `reach`
+// (h_d = L_d / n_d, n_d = round(L_d / h), L_d the water's largest coordinate, or the tank's size
+// where there is no water), so that a water box from the tank's walls, as the still-water tank's
+// and the dam-break column's, keeps its size (the tank's far walls fall on the nearest layer
+// instead), the centres (i, j, k) with i + j + k even the particles (half the cells: 2 h^3 = l0^3
+// per particle unstretched). Wall and dummy layers keep the thickness of the cubic lattice's:
+// round(layers l0 / h) fcc layers.
+struct FillGrid {
+  Eigen::Vector3d spacing;
+  int wall_layers = 0, layers = 0;  // solved walls; walls and dummies
+  bool fcc = false;
+};
+
+FillGrid fill_grid(const Tank3d& tank, double l0, MpsParameters::FillLattice lattice,
+                   const Eigen::Vector3d& reach) {
+  FillGrid grid{Eigen::Vector3d::Constant(l0), tank.wall_layers,
+                tank.wall_layers + tank.dummy_layers, false};
+  if (lattice == MpsParameters::FillLattice::cubic) return grid;
+  const double h = fcc_layer_spacing_over_l0() * l0;
+  const std::array<double, 3> size{tank.length, tank.width, tank.height};
+  for (int d = 0; d < 3; ++d) {
+    const double extent = reach[d] > 0.5 * h ? std::min(reach[d], size[d]) : size[d];
+    grid.spacing[d] = extent / std::max(1, cells(extent, h));
+  }
+  grid.wall_layers = std::max(1, cells(tank.wall_layers * l0, h));
+  grid.layers = std::max(grid.wall_layers, cells(grid.layers * l0, h));
+  grid.fcc = true;
+  return grid;
+}
+
 // The cells of the tank and its walls: ix in [-layers, nx + layers), likewise iy, and
 // iz in [-layers, nz) (the walls end at the tank's rim; nothing above it).
 class TankLattice {
  public:
-  TankLattice(const Tank3d& tank, double l0)
-      : l0_(l0),
-        layers_(tank.wall_layers + tank.dummy_layers),
-        n_{cells(tank.length, l0), cells(tank.width, l0), cells(tank.height, l0)} {
+  TankLattice(const Tank3d& tank, const FillGrid& grid)
+      : grid_(grid),
+        layers_(grid.layers),
+        n_{cells(tank.length, grid.spacing[0]), cells(tank.width, grid.spacing[1]),
+           cells(tank.height, grid.spacing[2])} {
     if (n_[0] < 1 || n_[1] < 1 || n_[2] < 1) {
       throw std::invalid_argument("tank_3d: the tank must be at least one cell l0 in each size");
     }
@@ -46,14 +80,19 @@ class TankLattice {
     return a + size_[0] * (b + size_[1] * c);
   }
   Eigen::Vector3d centre(const std::array<int, 3>& c) const {
-    return {(c[0] + 0.5) * l0_, (c[1] + 0.5) * l0_, (c[2] + 0.5) * l0_};
+    return {(c[0] + 0.5) * grid_.spacing[0], (c[1] + 0.5) * grid_.spacing[1],
+            (c[2] + 0.5) * grid_.spacing[2]};
+  }
+  // Whether the cell holds a particle (every cell of the cubic lattice, half of the fcc's).
+  bool site(const std::array<int, 3>& c) const {
+    return !grid_.fcc || (c[0] + c[1] + c[2]) % 2 == 0;
   }
   bool inside_tank(const std::array<int, 3>& c) const {
     return c[0] >= 0 && c[0] < n_[0] && c[1] >= 0 && c[1] < n_[1] && c[2] >= 0 && c[2] < n_[2];
   }
 
  private:
-  double l0_;
+  FillGrid grid_;
   int layers_;
   std::array<int, 3> n_, size_{};
 };
@@ -143,7 +182,10 @@ ParticleSet tank_3d(MpsParameters& parameters, const Tank3d& tank,
     throw std::invalid_argument("tank_3d: at least one wall layer, no negative dummy layers");
   }
   const double l0 = parameters.particle_spacing;
-  const TankLattice lattice(tank, l0);
+  Eigen::Vector3d reach = Eigen::Vector3d::Zero();  // the water's far end along each axis
+  for (const auto& box : water) reach = reach.cwiseMax(box.max());
+  const FillGrid grid = fill_grid(tank, l0, parameters.fill_lattice, reach);
+  const TankLattice lattice(tank, grid);
   std::vector<Eigen::AlignedBox3d> mesh_boxes;  // to skip the ray test far from a mesh
   for (const auto& mesh : solids) mesh_boxes.push_back(bounds(mesh));
   std::vector<char> open(lattice.count(), 0);
@@ -160,17 +202,20 @@ ParticleSet tank_3d(MpsParameters& parameters, const Tank3d& tank,
   // One pass in the order z, y, x (particles of a layer together, as the 2D builders).
   ParticleSet set;
   for (int k = 0; k < lattice.count(); ++k) {
-    const Eigen::Vector3d x = lattice.centre(lattice.cell(k));
+    const auto c = lattice.cell(k);
+    if (!lattice.site(c)) continue;
+    const Eigen::Vector3d x = lattice.centre(c);
     if (open[k]) {
       if (in_any(water, x)) set.add(x, ParticleKind::fluid);
-    } else if (depth[k] <= tank.wall_layers) {
+    } else if (depth[k] <= grid.wall_layers) {
       set.add(x, ParticleKind::wall);
     } else if (depth[k] <= lattice.layers()) {
       set.add(x, ParticleKind::dummy);
     }
   }
+  if (grid.fcc) parameters.fill_stretch = grid.spacing / (fcc_layer_spacing_over_l0() * l0);
   if (parameters.domain.isEmpty()) {
-    const double margin = (lattice.layers() + 2) * l0;
+    const double margin = (tank.wall_layers + tank.dummy_layers + 2) * l0;
     parameters.domain = Eigen::AlignedBox3d(
         Eigen::Vector3d(-margin, -margin, -margin),
         Eigen::Vector3d(tank.length + margin, tank.width + margin, 2.0 * tank.height));

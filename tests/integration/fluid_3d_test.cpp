@@ -213,5 +213,24 @@ TEST(Fluid3d, ValidateRefusesSceneKindsWithoutA3dBuilder) {
   EXPECT_NE(flat.output.find("must exceed min"), std::string::npos) << flat.output;
 }
 
+// fill_lattice (MpsParameters): a 3D scene takes fcc; an unknown lattice, and fcc in 2D, are
+// refused at the key's line.
+TEST(Fluid3d, ValidateChecksTheFillLattice) {
+  const auto fcc = run_cosim(fmt::format(
+      "validate {} --set participants.fluid_mps.fill_lattice=fcc", scenario("still_water_3d")));
+  EXPECT_EQ(fcc.exit_code, 0) << fcc.output;
+  const auto unknown = run_cosim(fmt::format(
+      "validate {} --set participants.fluid_mps.fill_lattice=hcp", scenario("still_water_3d")));
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_NE(unknown.output.find("key 'participants.fluid_mps.fill_lattice'"), std::string::npos)
+      << unknown.output;
+  EXPECT_NE(unknown.output.find("is not one of: cubic, fcc"), std::string::npos) << unknown.output;
+  const auto flat = run_cosim(fmt::format(
+      "validate {} --set participants.fluid_mps.fill_lattice=fcc", scenario("still_water")));
+  EXPECT_NE(flat.exit_code, 0);
+  EXPECT_NE(flat.output.find("scenario.yaml:"), std::string::npos) << flat.output;
+  EXPECT_NE(flat.output.find("fcc is a 3D lattice"), std::string::npos) << flat.output;
+}
+
 }  // namespace
 }  // namespace cosim::testing

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cosim/fluid_mps/kernels.hpp"
 #include "cosim/scenario/parameters.hpp"
 
 namespace cosim::mps {
@@ -170,6 +171,19 @@ struct MpsParameters {
   // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
   double shifting_coefficient = 0.0;
   double runaway_speed = 50.0;  // [m/s]; faster particles stop the run with a StabilityError
+  // Lattice of the initial particles of the 3D scene builders (scenes.hpp), on which n0 and
+  // lambda are computed (kernels.hpp, lattice_sums).
+  //  cubic: simple cubic of spacing l0 (seed 001), every particle l0^3.
+  //  fcc:   face-centred cubic with the same volume l0^3 per particle (cube edge 4^(1/3) l0,
+  //         4 particles per cube, 12 nearest neighbours at 2^(1/6) l0 = 1.12 l0): the close
+  //         packing that is stable under isotropic pressure, where the simple cubic lattice is
+  //         a saddle for repulsive pair forces (Born 1940; Ashcroft & Mermin ch. 4). 3D only.
+  enum class FillLattice { cubic, fcc };
+  FillLattice fill_lattice = FillLattice::cubic;
+  // Set by the 3D scene builders, not a key: how much the fcc fill's layer spacing along x, y, z
+  // is stretched (by at most 1/(2n) for n layers) for whole layers to fit the water; n0, lambda
+  // and the particle mass (rho times the volume per particle) are taken on that lattice.
+  Eigen::Vector3d fill_stretch = Eigen::Vector3d::Ones();
   // Particles outside are 'escaped'. Empty box: the bounding box of the initial particles grown
   // by 20 l0 on each side.
   Eigen::AlignedBox3d domain;
@@ -193,6 +207,8 @@ inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForm
      {"corrected_interior", MpsParameters::GradientForm::corrected_interior},
      {"corrected_blended", MpsParameters::GradientForm::corrected_blended},
      {"corrected_split", MpsParameters::GradientForm::corrected_split}}};
+inline constexpr scenario::Choices<MpsParameters::FillLattice, 2> kFillLattices{
+    {{"cubic", MpsParameters::FillLattice::cubic}, {"fcc", MpsParameters::FillLattice::fcc}}};
 
 // The keys of `participants.fluid_mps` that are MpsParameters, each declared once
 // (cosim/scenario/parameters.hpp): the scenario parser, validate_parameters() and `cosim keys`
@@ -254,6 +270,10 @@ void visit_parameters(P& p, V& v) {
         .in(Range::between(0.0, 10.0))
         .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),
     p.shifting_coefficient);
+  v(Key("fill_lattice")
+        .doc("3D start lattice: cubic (spacing l0) or fcc (face-centred cubic, l0^3 per "
+             "particle, nearest neighbours 1.12 l0); n0 and lambda are taken on it"),
+    p.fill_lattice, kFillLattices);
 }
 
 // Rough memory per particle [bytes]: about 25 per-particle vectors and scalars of FluidSystem
@@ -269,6 +289,11 @@ inline double estimated_bytes_per_particle(const MpsParameters& p) {
 // The library's check of MpsParameters: the declared ranges, then the periodic seam (set by the
 // scene builders). Throws scenario::ParameterError ("MpsParameters: key 'k': problem").
 void validate_parameters(const MpsParameters& p);
+
+// n0, lambda and the neighbour count of the start lattice (fill_lattice, fill_stretch) at the
+// radius radius_over_l0 l0, and the volume per particle of that lattice [m^3 in 3D, m^2 in 2D].
+LatticeSums fill_lattice_sums(const MpsParameters& p, double radius_over_l0);
+double fill_volume_per_particle(const MpsParameters& p);
 
 // The largest reach of any operator [m]: influence radii and the collision distance.
 inline double largest_influence_radius(const MpsParameters& p) {
