@@ -107,7 +107,8 @@ void FluidSystem::initialise() {
     for (std::int64_t pair = near_.offset[k]; pair < near_end_[k]; ++pair) {
       sum += weight(near_.distance[pair], re);
     }
-    number_densities_[order_[k]] = sum;
+    number_densities_[order_[k]] =
+        kind_[k] == ParticleKind::dummy ? std::numeric_limits<double>::quiet_NaN() : sum;
   }
 }
 

@@ -227,7 +227,12 @@ void NeighbourGrid::search_block(const Eigen::Array3i& cell, std::vector<int>& x
 }
 
 void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
-                                      const std::vector<int>& key, NeighbourList& list) const {
+                                      const std::vector<int>& key, NeighbourList& list,
+                                      const std::vector<char>* rows) const {
+  if (rows && rows->size() != positions.size()) {
+    throw std::invalid_argument("NeighbourGrid::neighbours_by_key: rows and positions differ");
+  }
+  auto wants_row = [&](int i) { return rows == nullptr || (*rows)[i] != 0; };
   if (radius > cell_size_ * (1.0 + 1e-12)) {
     throw std::invalid_argument("NeighbourGrid::neighbours_by_key: radius exceeds the cell size");
   }
@@ -262,7 +267,12 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
     std::vector<double> distance2;
     std::vector<int> xs;
     for (std::int64_t c = c_begin; c < c_end; ++c) {
-      if (cell_start_[c] == cell_start_[c + 1]) continue;
+      // A cell none of whose particles wants a row of its own is not searched at all.
+      bool wanted = false;
+      for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1] && !wanted; ++s) {
+        wanted = wants_row(sorted_[s]);
+      }
+      if (!wanted) continue;
       const Eigen::Array3i cell(
           static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
           static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
@@ -289,6 +299,7 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
       }
       for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
         const int i = sorted_[s];
+        if (!wants_row(i)) continue;  // an empty row: offset stays 0
         const Eigen::Vector3d xi = positions[i];
         const std::size_t at = index.size();
         segment[i] = static_cast<std::int64_t>(at);

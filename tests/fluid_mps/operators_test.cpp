@@ -1,6 +1,7 @@
 // Unit tests of the MPS building blocks: lattice sums, operators, neighbour search, PCG.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -127,6 +128,49 @@ TEST(MpsNeighbourGrid, MatchesBruteForce) {
       for (const auto& q : points) brute += (q - points[i]).norm() < 2.5 * radius;
       EXPECT_EQ(static_cast<int>(queried.size()), brute);
     }
+  }
+}
+
+// The keyed search with a row mask against the plain search: a particle without a row of its
+// own gets none, every other row holds exactly the plain search's partners (the masked particles
+// among them), in ascending key.
+TEST(MpsNeighbourGrid, KeyedSearchWithRowMaskKeepsTheOtherRows) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int dimension : {2, 3}) {
+    const int n = 1200;
+    std::vector<Eigen::Vector3d> points(n);
+    for (auto& p : points) p = Eigen::Vector3d(u(rng), u(rng), dimension == 3 ? u(rng) : 0.0);
+    std::vector<int> key(n);
+    for (int i = 0; i < n; ++i) key[i] = (i * 7919) % n;  // a permutation: n is not a multiple
+    std::vector<char> rows(n);
+    for (int i = 0; i < n; ++i) rows[i] = points[i].x() < 0.4 ? 0 : 1;  // a "dummy" slab
+    const double radius = 0.08;
+    NeighbourGrid grid(dimension,
+                       Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, -0.1), Eigen::Vector3d(1, 1, 1.1)),
+                       radius);
+    grid.build(points);
+    const NeighbourList plain = grid.neighbours(points, radius);
+    NeighbourList masked;
+    grid.neighbours_by_key(points, radius, key, masked, &rows);
+    int checked = 0, partners_without_row = 0;
+    for (int i = 0; i < n; ++i) {
+      std::vector<int> found(masked.index.begin() + masked.begin(i),
+                             masked.index.begin() + masked.end(i));
+      if (!rows[i]) {
+        EXPECT_TRUE(found.empty()) << i;
+        continue;
+      }
+      std::vector<int> expected(plain.index.begin() + plain.begin(i),
+                                plain.index.begin() + plain.end(i));
+      std::sort(expected.begin(), expected.end(),
+                [&](int a, int b) { return key[a] < key[b]; });
+      EXPECT_EQ(found, expected) << i;
+      for (int j : found) partners_without_row += rows[j] == 0;
+      ++checked;
+    }
+    EXPECT_GT(checked, n / 2);
+    EXPECT_GT(partners_without_row, 0);  // the masked particles are still partners
   }
 }
 

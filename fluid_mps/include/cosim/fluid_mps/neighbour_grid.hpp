@@ -51,9 +51,12 @@ class NeighbourGrid {
   // particle ids of particles stored in another order), written into `list` (its storage is
   // reused) without distances. Built cell by cell: the particles of the 3^D cells around a cell
   // are gathered once, sorted by key and tested against each particle of the cell, so no
-  // per-particle sort is needed. Parallel; the same list whatever the thread count.
+  // per-particle sort is needed. Parallel; the same list whatever the thread count. With `rows`
+  // (one entry a particle), a particle with rows[i] == 0 gets an empty row of its own but is
+  // still a partner of the others: the rows of every other particle are those without `rows`.
   void neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
-                         const std::vector<int>& key, NeighbourList& list) const;
+                         const std::vector<int>& key, NeighbourList& list,
+                         const std::vector<char>* rows = nullptr) const;
 
   // Included particles cell by cell (cells in memory order, z slowest), each cell's in index
   // order: an order along the cells for memory locality.
