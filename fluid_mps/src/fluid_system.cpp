@@ -96,6 +96,7 @@ void FluidSystem::initialise() {
                                         p.dimension == 3 ? kAmgFromUnknowns3d : kAmgFromUnknowns);
       break;
   }
+  pressure_solver_.set_single_precision_product(p.single_precision_product);
   StepReport unused;
   gather_state();
   update_neighbours(x_, unused, true);
