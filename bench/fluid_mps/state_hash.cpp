@@ -57,12 +57,12 @@ void report(const char* name, FluidSystem& system, int steps) {
     state.add(system.pressures()[i]);
     if (system.kinds()[i] != ParticleKind::dummy) density.add(system.number_densities()[i]);
   }
-  std::printf("%-28s particles %6d steps %4d t %.9f CG iterations %7ld state %016llx density "
-              "%016llx front %.6f m height %.6f m mean fluid pressure %.4f Pa\n",
-              name, system.particle_count(), steps, system.time(), iterations,
-              static_cast<unsigned long long>(state.value),
-              static_cast<unsigned long long>(density.value), front, height,
-              pressure / std::max(1, fluid));
+  std::printf(
+      "%-28s particles %6d steps %4d t %.9f CG iterations %7ld state %016llx density "
+      "%016llx front %.6f m height %.6f m mean fluid pressure %.4f Pa\n",
+      name, system.particle_count(), steps, system.time(), iterations,
+      static_cast<unsigned long long>(state.value), static_cast<unsigned long long>(density.value),
+      front, height, pressure / std::max(1, fluid));
 }
 
 MpsParameters dam_break_parameters(double l0, double a, int dimension, bool single) {

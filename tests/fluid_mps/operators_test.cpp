@@ -163,8 +163,7 @@ TEST(MpsNeighbourGrid, KeyedSearchWithRowMaskKeepsTheOtherRows) {
       }
       std::vector<int> expected(plain.index.begin() + plain.begin(i),
                                 plain.index.begin() + plain.end(i));
-      std::sort(expected.begin(), expected.end(),
-                [&](int a, int b) { return key[a] < key[b]; });
+      std::sort(expected.begin(), expected.end(), [&](int a, int b) { return key[a] < key[b]; });
       EXPECT_EQ(found, expected) << i;
       for (int j : found) partners_without_row += rows[j] == 0;
       ++checked;
@@ -305,7 +304,8 @@ int product_differing_from_plain_loop(int n, bool single = false) {
   for (int i = 0; i < n; ++i) {
     double sum = 0.0;
     for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-      const double value = single ? static_cast<double>(static_cast<float>(m.value[k])) : m.value[k];
+      const double value =
+          single ? static_cast<double>(static_cast<float>(m.value[k])) : m.value[k];
       sum += value * x[m.column[k]];
     }
     if (std::memcmp(&sum, &y[i], sizeof sum) != 0) ++differing;
@@ -384,9 +384,9 @@ TEST(MpsPressureSolver, SinglePrecisionProductConvergesToTheDoubleSolution) {
     difference = std::max(difference, std::abs(x_single[i] - x_double[i]));
     largest = std::max(largest, std::abs(x_double[i]));
   }
-  std::cout << "[single product] " << rows << " unknowns: " << d.iterations << " / "
-            << s.iterations << " iterations, true residual " << std::sqrt(residual2 / b2)
-            << ", largest difference " << difference / largest << " of the largest pressure\n";
+  std::cout << "[single product] " << rows << " unknowns: " << d.iterations << " / " << s.iterations
+            << " iterations, true residual " << std::sqrt(residual2 / b2) << ", largest difference "
+            << difference / largest << " of the largest pressure\n";
   EXPECT_LT(std::sqrt(residual2 / b2), 1e-6);
   EXPECT_LT(difference, 1e-6 * largest);
   EXPECT_GT(difference, 0.0);  // it is a different product: the bits change

@@ -91,8 +91,8 @@ class NeighbourGrid {
   };
   void gather_candidates(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
                          const std::vector<int>& key, KeyedScratch& s) const;
-  std::size_t candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2,
-                                  KeyedScratch& s, int* out) const;
+  std::size_t candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2, KeyedScratch& s,
+                                  int* out) const;
   // x cells within `reach` of cell x, wrapped when periodic, each once, in ascending order.
   void x_range(int x, int reach, std::vector<int>& xs) const;
   // Extra y cells to search: across a seam with a drop, neighbours are stored up to `drop`
