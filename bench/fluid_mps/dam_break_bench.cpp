@@ -65,6 +65,9 @@ void BM_Column3dStep(benchmark::State& state) {
   if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
     p.multigrid_radius_over_l0 = std::atof(radius);  // for sweeps of the hierarchy radius
   }
+  if (const char* single = std::getenv("COSIM_BENCH_SINGLE_PRODUCT")) {
+    p.single_precision_product = std::atoi(single) != 0;  // float values in the CG products
+  }
   FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
   while (system.time() < 0.03) system.step(system.stable_dt());
   long pcg_iterations = 0, steps = 0, searches = 0, unknowns = 0;

@@ -125,7 +125,9 @@ class FluidProcess final : public coupler::Solver {
     }
     writer_.describe("velocity", {"m/s", "particle velocity (world frame)", ""});
     writer_.describe("pressure", {"Pa", "particle pressure", ""});
-    writer_.describe("number_density", {"1", "MPS particle number density at r*", ""});
+    writer_.describe(
+        "number_density",
+        {"1", "MPS particle number density at r* (NaN for dummies: not computed)", ""});
     writer_.describe("kind", {"1", "particle kind", "0 fluid, 1 wall, 2 dummy, 3 inactive"});
     spdlog::info("{} particles, l0 = {} m, stable dt {:.3g} s", system_->particle_count(),
                  config_.parameters.particle_spacing, system_->stable_dt());

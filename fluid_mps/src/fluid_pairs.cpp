@@ -14,6 +14,9 @@
 // Loops run in parallel from 4096 items on: under that the OpenMP fork/join costs more than the
 // work, and oversubscribed CI cores make it far worse.
 namespace cosim::mps {
+namespace {
+const double kNotComputed = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
 
 void FluidSystem::gather_state() {
   const int n = particle_count();
@@ -49,7 +52,7 @@ void FluidSystem::scatter_state() {
     positions_[i] = position_star_[k];
     velocities_[i] = velocity_star_[k];
     pressures_[i] = pressure_[k];
-    number_densities_[i] = density_star_[k];
+    number_densities_[i] = kind_[k] == ParticleKind::dummy ? kNotComputed : density_star_[k];
   }
 }
 
@@ -101,7 +104,16 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
     gather_state();  // x is x_, now in the new order
     grid = grid_at(x);
   }
-  grid.neighbours_by_key(x, list_radius, order_, neighbours_);
+  // Dummy particles get no row of their own: no stage reads one (they carry no pressure, take no
+  // explicit or collision step, and are only partners of the walls' and the fluid's rows), so
+  // their own number density is not computed either (number_densities(): NaN).
+  own_row_.resize(n);
+  bool any_dummy = false;
+  for (int k = 0; k < n; ++k) {
+    own_row_[k] = kind_[k] == ParticleKind::dummy ? 0 : 1;
+    any_dummy = any_dummy || own_row_[k] == 0;
+  }
+  grid.neighbours_by_key(x, list_radius, order_, neighbours_, any_dummy ? &own_row_ : nullptr);
   near_.offset = neighbours_.offset;
   near_.index.resize(neighbours_.pair_count());
   near_.distance.resize(neighbours_.pair_count());

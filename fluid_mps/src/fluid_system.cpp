@@ -113,6 +113,7 @@ void FluidSystem::initialise() {
                                         p.dimension == 3 ? kAmgFromUnknowns3d : kAmgFromUnknowns);
       break;
   }
+  pressure_solver_.set_single_precision_product(p.single_precision_product);
   StepReport unused;
   gather_state();
   update_neighbours(x_, unused, true);
@@ -124,7 +125,8 @@ void FluidSystem::initialise() {
     for (std::int64_t pair = near_.offset[k]; pair < near_end_[k]; ++pair) {
       sum += weight(near_.distance[pair], re);
     }
-    number_densities_[order_[k]] = sum;
+    number_densities_[order_[k]] =
+        kind_[k] == ParticleKind::dummy ? std::numeric_limits<double>::quiet_NaN() : sum;
   }
 }
 

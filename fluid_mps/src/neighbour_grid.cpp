@@ -226,8 +226,71 @@ void NeighbourGrid::search_block(const Eigen::Array3i& cell, std::vector<int>& x
   x_range(cell.x(), 1, xs);
 }
 
+// The particles of the 3^D cells around cell c, sorted by key, with their positions.
+void NeighbourGrid::gather_candidates(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
+                                      const std::vector<int>& key, KeyedScratch& s) const {
+  const Eigen::Array3i cell(
+      static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
+      static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
+  Eigen::Array3i low, high;
+  search_block(cell, s.xs, low, high);
+  s.candidate.clear();
+  visit_cells(s.xs, low, high, [&](int j) {
+    s.candidate.push_back(static_cast<std::uint64_t>(key[j]) << 32 | static_cast<std::uint32_t>(j));
+  });
+  std::sort(s.candidate.begin(), s.candidate.end());
+  const std::size_t count = s.candidate.size();
+  s.cx.resize(count);
+  s.cy.resize(count);
+  s.cz.resize(count);
+  s.cj.resize(count);
+  s.distance2.resize(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    s.cj[k] = static_cast<int>(static_cast<std::uint32_t>(s.candidate[k]));
+    const Eigen::Vector3d& x = positions[s.cj[k]];
+    s.cx[k] = x.x();
+    s.cy[k] = x.y();
+    s.cz[k] = x.z();
+  }
+}
+
+// Writes the candidates of `s` closer than sqrt(radius2) to xi (particle i itself left out) to
+// out, in candidate order; returns how many.
+std::size_t NeighbourGrid::candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2,
+                                               KeyedScratch& s, int* out) const {
+  const std::size_t count = s.cj.size();
+  std::size_t found = 0;
+  if (!periodic_.enabled) {
+    // Branch-free: every candidate is written, the slot kept only if in reach. The sum of
+    // squares in the order of Eigen's squaredNorm, so the pairs are those of neighbours().
+    const double x0 = xi.x(), y0 = xi.y(), z0 = xi.z();
+    const double *cx = s.cx.data(), *cy = s.cy.data(), *cz = s.cz.data();
+    double* d2 = s.distance2.data();
+#pragma omp simd
+    for (std::size_t k = 0; k < count; ++k) {
+      const double dx = cx[k] - x0, dy = cy[k] - y0, dz = cz[k] - z0;
+      d2[k] = (dx * dx + dy * dy) + dz * dz;
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      out[found] = s.cj[k];
+      found += static_cast<std::size_t>((d2[k] < radius2) & (s.cj[k] != i));
+    }
+    return found;
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    const Eigen::Vector3d d(s.cx[k] - xi.x(), s.cy[k] - xi.y(), s.cz[k] - xi.z());
+    if (s.cj[k] != i && periodic_.wrap(d).squaredNorm() < radius2) out[found++] = s.cj[k];
+  }
+  return found;
+}
+
 void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
-                                      const std::vector<int>& key, NeighbourList& list) const {
+                                      const std::vector<int>& key, NeighbourList& list,
+                                      const std::vector<char>* rows) const {
+  if (rows && rows->size() != positions.size()) {
+    throw std::invalid_argument("NeighbourGrid::neighbours_by_key: rows and positions differ");
+  }
+  auto wants_row = [&](int i) { return rows == nullptr || (*rows)[i] != 0; };
   if (radius > cell_size_ * (1.0 + 1e-12)) {
     throw std::invalid_argument("NeighbourGrid::neighbours_by_key: radius exceeds the cell size");
   }
@@ -256,66 +319,24 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
     const std::int64_t c_begin = first_cell(thread);
     const std::int64_t c_end = thread + 1 == count ? cell_count : first_cell(thread + 1);
     std::vector<int>& index = block_index[thread];
-    std::vector<std::uint64_t> candidate;  // key << 32 | particle, sorted
-    std::vector<double> cx, cy, cz;        // their positions, in that order
-    std::vector<int> cj;                   // and indices
-    std::vector<double> distance2;
-    std::vector<int> xs;
+    KeyedScratch scratch;
     for (std::int64_t c = c_begin; c < c_end; ++c) {
-      if (cell_start_[c] == cell_start_[c + 1]) continue;
-      const Eigen::Array3i cell(
-          static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
-          static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
-      Eigen::Array3i low, high;
-      search_block(cell, xs, low, high);
-      candidate.clear();
-      visit_cells(xs, low, high, [&](int j) {
-        candidate.push_back(static_cast<std::uint64_t>(key[j]) << 32 |
-                            static_cast<std::uint32_t>(j));
-      });
-      std::sort(candidate.begin(), candidate.end());
-      const std::size_t count = candidate.size();
-      cx.resize(count);
-      cy.resize(count);
-      cz.resize(count);
-      cj.resize(count);
-      distance2.resize(count);
-      for (std::size_t k = 0; k < count; ++k) {
-        cj[k] = static_cast<int>(static_cast<std::uint32_t>(candidate[k]));
-        const Eigen::Vector3d& x = positions[cj[k]];
-        cx[k] = x.x();
-        cy[k] = x.y();
-        cz[k] = x.z();
+      // A cell none of whose particles wants a row of its own is not searched at all.
+      bool wanted = false;
+      for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1] && !wanted; ++s) {
+        wanted = wants_row(sorted_[s]);
       }
+      if (!wanted) continue;
+      gather_candidates(c, positions, key, scratch);
       for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
         const int i = sorted_[s];
-        const Eigen::Vector3d xi = positions[i];
+        if (!wants_row(i)) continue;  // an empty row: offset stays 0
         const std::size_t at = index.size();
         segment[i] = static_cast<std::int64_t>(at);
         owner[i] = thread;
-        index.resize(at + count);
-        int* out = index.data() + at;
-        std::size_t found = 0;
-        if (!periodic_.enabled) {
-          // Branch-free: every candidate is written, the slot kept only if in reach. The sum of
-          // squares in the order of Eigen's squaredNorm, so the pairs are those of neighbours().
-          const double x0 = xi.x(), y0 = xi.y(), z0 = xi.z();
-          double* d2 = distance2.data();
-#pragma omp simd
-          for (std::size_t k = 0; k < count; ++k) {
-            const double dx = cx[k] - x0, dy = cy[k] - y0, dz = cz[k] - z0;
-            d2[k] = (dx * dx + dy * dy) + dz * dz;
-          }
-          for (std::size_t k = 0; k < count; ++k) {
-            out[found] = cj[k];
-            found += static_cast<std::size_t>((d2[k] < radius2) & (cj[k] != i));
-          }
-        } else {
-          for (std::size_t k = 0; k < count; ++k) {
-            const Eigen::Vector3d d(cx[k] - xi.x(), cy[k] - xi.y(), cz[k] - xi.z());
-            if (cj[k] != i && periodic_.wrap(d).squaredNorm() < radius2) out[found++] = cj[k];
-          }
-        }
+        index.resize(at + scratch.cj.size());
+        const std::size_t found =
+            candidates_in_reach(i, positions[i], radius2, scratch, index.data() + at);
         index.resize(at + found);
         list.offset[i + 1] = static_cast<std::int64_t>(found);
       }

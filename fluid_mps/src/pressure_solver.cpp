@@ -38,8 +38,8 @@ double dot(const std::vector<double>& a, const std::vector<double>& b,
 // keeps its sum (a select: no term is added that the plain loop would not add).
 constexpr int kRowGroup = 4;
 
-template <class Column>
-void multiply_rows(const std::int64_t* offset, const Column* column, const double* value,
+template <class Column, class Value>
+void multiply_rows(const std::int64_t* offset, const Column* column, const Value* value,
                    const double* x, int begin, int end, int rows, double* y) {
   const std::int64_t entries = offset[rows];
   int i = begin;
@@ -56,21 +56,22 @@ void multiply_rows(const std::int64_t* offset, const Column* column, const doubl
     }
     for (std::int64_t t = 0; t < shortest; ++t) {
       for (int g = 0; g < kRowGroup; ++g) {
-        sum[g] += value[first[g] + t] * x[column[first[g] + t]];
+        sum[g] += static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
       }
     }
     if (first[kRowGroup - 1] + longest <= entries) {
       // The slots past a row's end are those of the next rows: valid to read, never summed.
       for (std::int64_t t = shortest; t < longest; ++t) {
         for (int g = 0; g < kRowGroup; ++g) {
-          const double added = sum[g] + value[first[g] + t] * x[column[first[g] + t]];
+          const double added =
+              sum[g] + static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
           sum[g] = t < length[g] ? added : sum[g];
         }
       }
     } else {
       for (int g = 0; g < kRowGroup; ++g) {
         for (std::int64_t k = first[g] + shortest; k < first[g] + length[g]; ++k) {
-          sum[g] += value[k] * x[column[k]];
+          sum[g] += static_cast<double>(value[k]) * x[column[k]];
         }
       }
     }
@@ -78,32 +79,55 @@ void multiply_rows(const std::int64_t* offset, const Column* column, const doubl
   }
   for (; i < end; ++i) {
     double sum = 0.0;
-    for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) sum += value[k] * x[column[k]];
+    for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) {
+      sum += static_cast<double>(value[k]) * x[column[k]];
+    }
     y[i] = sum;
   }
 }
 
 // The matrix as the products read it: below 65 536 unknowns with 16-bit column indices (10
-// instead of 12 bytes an entry; the product is bound by reading the matrix), made once a solve.
+// instead of 12 bytes an entry; the product is bound by reading the matrix), made once a solve;
+// with `single_value`, values rounded to float (6 bytes an entry with short indices).
 struct RowView {
   const SparseRows* m = nullptr;
   const std::uint16_t* short_column = nullptr;  // null: m->column
+  const float* single_value = nullptr;          // null: m->value
 };
 
-void multiply_rows(const RowView& view, const double* x, int begin, int end, double* y) {
+template <class Value>
+void multiply_rows(const RowView& view, const Value* value, const double* x, int begin, int end,
+                   double* y) {
   const SparseRows& m = *view.m;
   if (view.short_column) {
-    multiply_rows(m.offset.data(), view.short_column, m.value.data(), x, begin, end, m.rows(), y);
+    multiply_rows(m.offset.data(), view.short_column, value, x, begin, end, m.rows(), y);
   } else {
-    multiply_rows(m.offset.data(), m.column.data(), m.value.data(), x, begin, end, m.rows(), y);
+    multiply_rows(m.offset.data(), m.column.data(), value, x, begin, end, m.rows(), y);
   }
 }
 
-RowView row_view(const SparseRows& m, std::vector<std::uint16_t>& short_column) {
+void multiply_rows(const RowView& view, const double* x, int begin, int end, double* y) {
+  if (view.single_value) {
+    multiply_rows(view, view.single_value, x, begin, end, y);
+  } else {
+    multiply_rows(view, view.m->value.data(), x, begin, end, y);
+  }
+}
+
+RowView row_view(const SparseRows& m, std::vector<std::uint16_t>& short_column,
+                 std::vector<float>* single_value = nullptr) {
   RowView view;
   view.m = &m;
-  if (m.rows() > 65536) return view;
   const std::int64_t entries = static_cast<std::int64_t>(m.column.size());
+  if (single_value) {
+    single_value->resize(m.value.size());
+#pragma omp parallel for schedule(static) if (entries >= 65536)
+    for (std::int64_t k = 0; k < entries; ++k) {
+      (*single_value)[k] = static_cast<float>(m.value[k]);
+    }
+    view.single_value = single_value->data();
+  }
+  if (m.rows() > 65536) return view;
   short_column.resize(m.column.size());
 #pragma omp parallel for schedule(static) if (entries >= 65536)
   for (std::int64_t k = 0; k < entries; ++k) {
@@ -228,7 +252,10 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) p[i] = z[i];
   double rz = dot(r, z, work.partial);
-  const RowView view = row_view(matrix, work.short_column);
+  // The initial residual is taken with the double matrix; with single values only the products
+  // of the iterations use the rounded matrix (a relative change of at most 2^-24 an entry).
+  const RowView view =
+      row_view(matrix, work.short_column, work.single_precision ? &work.single_value : nullptr);
   double residual = std::sqrt(dot(r, r, work.partial)) / rhs_norm;
   int iteration = 0;
   while (residual > tolerance && iteration < max_iterations) {
@@ -305,11 +332,13 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
                              });
 }
 
-void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y) {
+void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y,
+              bool single_precision) {
   const int n = matrix.rows();
   y.resize(n);
   std::vector<std::uint16_t> short_column;
-  const RowView view = row_view(matrix, short_column);
+  std::vector<float> single_value;
+  const RowView view = row_view(matrix, short_column, single_precision ? &single_value : nullptr);
   const int blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel for schedule(static) if (blocks >= 4)
   for (int block = 0; block < blocks; ++block) {

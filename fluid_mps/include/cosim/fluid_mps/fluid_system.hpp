@@ -74,7 +74,8 @@ class FluidSystem {
   const std::vector<Eigen::Vector3d>& velocities() const { return velocities_; }
   const std::vector<double>& pressures() const { return pressures_; }
   const std::vector<ParticleKind>& kinds() const { return kinds_; }
-  // Number densities at the temporary positions r* of the last step (initial positions before).
+  // Number densities at the temporary positions r* of the last step (initial positions before);
+  // NaN for dummy particles, whose own density no stage uses and which is not computed.
   const std::vector<double>& number_densities() const { return number_densities_; }
   const MpsParameters& parameters() const { return parameters_; }
   double time() const { return time_; }
@@ -239,7 +240,7 @@ class FluidSystem {
   NeighbourList near_;  // find_near_pairs: same offsets as neighbours_
   std::vector<std::int64_t> near_end_;
   std::vector<Eigen::Vector3d> search_positions_, scratch_;
-  std::vector<char> include_;
+  std::vector<char> include_, own_row_;  // grid membership; rows searched (not dummies)
   bool neighbours_valid_ = false;
   PressureSolver pressure_solver_;
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.

@@ -51,9 +51,12 @@ class NeighbourGrid {
   // particle ids of particles stored in another order), written into `list` (its storage is
   // reused) without distances. Built cell by cell: the particles of the 3^D cells around a cell
   // are gathered once, sorted by key and tested against each particle of the cell, so no
-  // per-particle sort is needed. Parallel; the same list whatever the thread count.
+  // per-particle sort is needed. Parallel; the same list whatever the thread count. With `rows`
+  // (one entry a particle), a particle with rows[i] == 0 gets an empty row of its own but is
+  // still a partner of the others: the rows of every other particle are those without `rows`.
   void neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
-                         const std::vector<int>& key, NeighbourList& list) const;
+                         const std::vector<int>& key, NeighbourList& list,
+                         const std::vector<char>* rows = nullptr) const;
 
   // Included particles cell by cell (cells in memory order, z slowest), each cell's in index
   // order: an order along the cells for memory locality.
@@ -78,6 +81,18 @@ class NeighbourGrid {
   // Cells searched around `cell` (the 3^D block, extended in y across a seam with a drop).
   void search_block(const Eigen::Array3i& cell, std::vector<int>& xs, Eigen::Array3i& low,
                     Eigen::Array3i& high) const;
+  // Work arrays of neighbours_by_key, one set a thread.
+  struct KeyedScratch {
+    std::vector<std::uint64_t> candidate;  // key << 32 | particle, sorted
+    std::vector<double> cx, cy, cz;        // their positions, in that order
+    std::vector<int> cj;                   // and indices
+    std::vector<double> distance2;
+    std::vector<int> xs;
+  };
+  void gather_candidates(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
+                         const std::vector<int>& key, KeyedScratch& s) const;
+  std::size_t candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2, KeyedScratch& s,
+                                  int* out) const;
   // x cells within `reach` of cell x, wrapped when periodic, each once, in ascending order.
   void x_range(int x, int reach, std::vector<int>& xs) const;
   // Extra y cells to search: across a seam with a drop, neighbours are stored up to `drop`

@@ -106,6 +106,11 @@ struct MpsParameters {
   // above (3D: from 200 000 unknowns, pressure_solver.hpp).
   enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic };
   PressurePreconditioner pressure_preconditioner = PressurePreconditioner::automatic;
+  // The products of the CG iterations read the matrix values rounded to float: 6 instead of 10
+  // bytes an entry, for a product bound by reading the matrix. Changes the bits of the pressure
+  // (a matrix perturbed by at most 2^-24 relative an entry); off by default
+  // (docs/performance.md: its cost and its effect on the validation figures).
+  bool single_precision_product = false;
   // amg: radius [l0] of the Laplacian model the multigrid hierarchy is built from (capped at the
   // Laplacian radius). Shorter than radius_laplacian_over_l0 makes the set-up and the cycles
   // cheaper for a few more iterations; 2.5 was the fastest of 2.1 / 2.5 / 3.0 / 4.0 measured at
@@ -249,6 +254,8 @@ void visit_parameters(P& p, V& v) {
     p.pcg_max_iterations);
   v(Key("pressure_preconditioner").doc("automatic: jacobi for small, amg for large systems"),
     p.pressure_preconditioner, kPreconditioners);
+  v(Key("single_precision_product").doc("CG products read float matrix values (changes the bits)"),
+    p.single_precision_product);
   v(Key("multigrid_radius_over_l0").in(radius).doc("radius of the amg hierarchy's Laplacian / l0"),
     p.multigrid_radius_over_l0);
   v(Key("compressibility").unit("1/Pa").in(Range::non_negative()).doc("artificial compressibility"),

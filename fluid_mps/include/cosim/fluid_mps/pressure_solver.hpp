@@ -43,8 +43,11 @@ constexpr int kAmgFromUnknowns = 4500;
 // switch point is that extrapolation, not a measurement.
 constexpr int kAmgFromUnknowns3d = 200000;
 
-// y = A x; each row summed in the order of its entries (the bits of the plain loop).
-void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y);
+// y = A x; each row summed in the order of its entries (the bits of the plain loop). With
+// `single_precision`, each value is first rounded to float (the bits of the plain loop over
+// double(float(value))), as the CG products do with set_single_precision_product.
+void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y,
+              bool single_precision = false);
 
 // Solves A x = b from the initial guess in x. Stops when |r| <= tolerance |b|. The Krylov loop is
 // our own, parallel, with dot products summed in fixed blocks, so the result is identical for
@@ -58,6 +61,8 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
 struct CgWork {
   std::vector<double> r, z, p, q, partial;
   std::vector<std::uint16_t> short_column;
+  bool single_precision = false;  // the CG products read float copies of the values
+  std::vector<float> single_value;
 };
 
 // A pressure solver that keeps its work arrays (and the AMG library objects) between solves, so
@@ -77,6 +82,11 @@ class PressureSolver {
                   double tolerance, int max_iterations,
                   const SparseRows* hierarchy_matrix = nullptr);
   Preconditioner preconditioner() const { return preconditioner_; }
+  // The products of the CG iterations read the matrix values rounded to float (fewer bytes an
+  // entry; sums, vectors and the initial residual stay double). Off by default: it changes the
+  // bits of the solution (docs/performance.md, single-precision product).
+  void set_single_precision_product(bool on) { work_.single_precision = on; }
+  bool single_precision_product() const { return work_.single_precision; }
   // Whether a system of `rows` unknowns is preconditioned by multigrid.
   bool uses_amg(int rows) const {
     return preconditioner_ == Preconditioner::amg ||

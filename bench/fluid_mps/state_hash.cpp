@@ -1,0 +1,108 @@
+// A fingerprint of a run for changes that must keep the bits: steps the 2D dam break (AMG,
+// Jacobi, the mixed source term) and the 3D column collapse of bench_fluid_mps and prints one
+// line per case with an FNV-1a hash of the bytes of every particle's position, velocity and
+// pressure after the run (and of the number densities of the particles that are not dummies).
+// Built against two commits and run with OMP_NUM_THREADS=1 and 2, equal lines mean equal bits.
+// Also printed, to compare runs that do not keep the bits (argument --single-product: the float
+// CG product): the surge front (largest fluid x), the water height at the back wall (largest
+// fluid height within 2 l0 of the smallest fluid x) and the mean fluid pressure.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+
+#include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/scenes.hpp"
+
+namespace {
+
+using namespace cosim::mps;
+
+struct Fnv1a {
+  std::uint64_t value = 14695981039346656037ull;
+  void add(const void* data, std::size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < bytes; ++k) value = (value ^ b[k]) * 1099511628211ull;
+  }
+  void add(double v) { add(&v, sizeof v); }
+};
+
+void report(const char* name, FluidSystem& system, int steps) {
+  const int up = system.parameters().dimension == 3 ? 2 : 1;
+  long iterations = 0;
+  for (int s = 0; s < steps; ++s) iterations += system.step(system.stable_dt()).pcg_iterations;
+  Fnv1a state, density;
+  double front = -1e300, back = 1e300, height = -1e300, pressure = 0.0;
+  int fluid = 0;
+  const double l0 = system.parameters().particle_spacing;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    front = std::max(front, system.positions()[i].x());
+    back = std::min(back, system.positions()[i].x());
+    pressure += system.pressures()[i];
+    ++fluid;
+  }
+  for (int i = 0; i < system.particle_count(); ++i) {
+    const Eigen::Vector3d& x = system.positions()[i];
+    if (system.kinds()[i] == ParticleKind::fluid && x.x() < back + 2.0 * l0) {
+      height = std::max(height, x[up]);
+    }
+  }
+  for (int i = 0; i < system.particle_count(); ++i) {
+    for (int axis = 0; axis < 3; ++axis) {
+      state.add(system.positions()[i][axis]);
+      state.add(system.velocities()[i][axis]);
+    }
+    state.add(system.pressures()[i]);
+    if (system.kinds()[i] != ParticleKind::dummy) density.add(system.number_densities()[i]);
+  }
+  std::printf(
+      "%-28s particles %6d steps %4d t %.9f CG iterations %7ld state %016llx density "
+      "%016llx front %.6f m height %.6f m mean fluid pressure %.4f Pa\n",
+      name, system.particle_count(), steps, system.time(), iterations,
+      static_cast<unsigned long long>(state.value), static_cast<unsigned long long>(density.value),
+      front, height, pressure / std::max(1, fluid));
+}
+
+MpsParameters dam_break_parameters(double l0, double a, int dimension, bool single) {
+  MpsParameters p;
+  p.single_precision_product = single;
+  p.dimension = dimension;
+  if (dimension == 3) {
+    p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
+    p.radius_laplacian_over_l0 = 3.1;
+  }
+  p.particle_spacing = l0;
+  p.max_dt = 0.25 * l0 / std::sqrt(9.81 * 2.0 * a);
+  return p;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool single = argc > 1 && std::strcmp(argv[1], "--single-product") == 0;
+  const double a = 0.05715;
+  using Pre = MpsParameters::PressurePreconditioner;
+  for (const Pre pre : {Pre::amg, Pre::jacobi}) {
+    MpsParameters p = dam_break_parameters(a / 40, a, 2, single);
+    p.pressure_preconditioner = pre;
+    FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
+    report(pre == Pre::amg ? "2D dam break a/l0=40 AMG" : "2D dam break a/l0=40 Jacobi", system,
+           150);
+  }
+  {
+    MpsParameters p = dam_break_parameters(a / 40, a, 2, single);
+    p.pressure_preconditioner = Pre::jacobi;
+    p.source_term = MpsParameters::SourceTerm::mixed;
+    FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
+    report("2D dam break 40 mixed", system, 150);
+  }
+  {
+    MpsParameters p = dam_break_parameters(a / 8, a, 3, single);
+    p.pressure_preconditioner = Pre::jacobi;
+    FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
+    report("3D column a/l0=8 Jacobi", system, 60);
+  }
+  return 0;
+}
