@@ -38,6 +38,36 @@ int centre_index(int dimension, int count) {
   return dimension == 3 ? (c * count + c) * count + c : c * count + c;
 }
 
+// The MPS Laplacian matrix of the particles `inside` selects (their row numbers in `row_of`, -1
+// outside; the others are p = 0 boundaries): diagonal sum w, off-diagonal -w to inside partners.
+template <class Inside>
+SparseRows kernel_laplacian(const NeighbourList& list, std::size_t particles, double radius,
+                            Inside inside, std::vector<int>& row_of) {
+  row_of.assign(particles, -1);
+  int rows = 0;
+  for (std::size_t i = 0; i < particles; ++i) {
+    if (inside(static_cast<int>(i))) row_of[i] = rows++;
+  }
+  SparseRows a;
+  for (std::size_t i = 0; i < particles; ++i) {
+    if (row_of[i] < 0) continue;
+    const int particle = static_cast<int>(i);
+    const std::size_t diagonal = a.column.size();
+    a.column.push_back(row_of[i]);
+    a.value.push_back(0.0);
+    for (int k = list.begin(particle); k < list.end(particle); ++k) {
+      const double w = weight(list.distance[k], radius);
+      a.value[diagonal] += w;
+      if (row_of[list.index[k]] >= 0) {
+        a.column.push_back(row_of[list.index[k]]);
+        a.value.push_back(-w);
+      }
+    }
+    a.offset.push_back(static_cast<std::int64_t>(a.column.size()));
+  }
+  return a;
+}
+
 }  // namespace
 
 TEST(MpsLatticeSums, MatchReferenceTableEveryRow) {
@@ -209,28 +239,9 @@ TEST(MpsPressureSolver, MultigridIterationsDoNotGrowWithResolution) {
       const int x = i % count, y = i / count;
       return x >= 4 && x < count - 4 && y >= 4 && y < count - 4;
     };
-    std::vector<int> row_of(points.size(), -1);
-    int rows = 0;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      if (inside(static_cast<int>(i))) row_of[i] = rows++;
-    }
-    SparseRows a;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      if (row_of[i] < 0) continue;
-      const int particle = static_cast<int>(i);
-      const std::size_t diagonal = a.column.size();
-      a.column.push_back(row_of[i]);
-      a.value.push_back(0.0);
-      for (int k = list.begin(particle); k < list.end(particle); ++k) {
-        const double w = weight(list.distance[k], ratio);
-        a.value[diagonal] += w;
-        if (row_of[list.index[k]] >= 0) {
-          a.column.push_back(row_of[list.index[k]]);
-          a.value.push_back(-w);
-        }
-      }
-      a.offset.push_back(static_cast<std::int64_t>(a.column.size()));
-    }
+    std::vector<int> row_of;
+    const SparseRows a = kernel_laplacian(list, points.size(), ratio, inside, row_of);
+    const int rows = a.rows();
     const std::vector<double> b(rows, 1.0);
     std::vector<double> x(rows, 0.0);
     const PcgResult amg = solve_pcg(a, b, x, 1e-8, 2000, Preconditioner::amg);
@@ -343,28 +354,9 @@ TEST(MpsPressureSolver, SinglePrecisionProductConvergesToTheDoubleSolution) {
     const int x = i % count, y = (i / count) % count, z = i / (count * count);
     return std::min({x, y, z}) >= 2 && std::max({x, y, z}) < count - 2;
   };
-  std::vector<int> row_of(points.size(), -1);
-  int rows = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (inside(static_cast<int>(i))) row_of[i] = rows++;
-  }
-  SparseRows a;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (row_of[i] < 0) continue;
-    const int particle = static_cast<int>(i);
-    const std::size_t diagonal = a.column.size();
-    a.column.push_back(row_of[i]);
-    a.value.push_back(0.0);
-    for (int k = list.begin(particle); k < list.end(particle); ++k) {
-      const double w = weight(list.distance[k], radius);
-      a.value[diagonal] += w;
-      if (row_of[list.index[k]] >= 0) {
-        a.column.push_back(row_of[list.index[k]]);
-        a.value.push_back(-w);
-      }
-    }
-    a.offset.push_back(static_cast<std::int64_t>(a.column.size()));
-  }
+  std::vector<int> row_of;
+  const SparseRows a = kernel_laplacian(list, points.size(), radius, inside, row_of);
+  const int rows = a.rows();
   std::vector<double> b(rows);
   for (int i = 0; i < rows; ++i) b[i] = 1.0 + 0.5 * std::sin(0.37 * i);
   std::vector<double> x_double(rows, 0.0), x_single(rows, 0.0);
