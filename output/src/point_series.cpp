@@ -3,6 +3,8 @@
 #include "cosim/output/point_series.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -60,6 +62,7 @@ FieldInfo completed(FieldInfo info, const std::string& default_unit,
 }
 
 constexpr const char* kUnspecified = "unspecified";
+constexpr double kNotComputed = std::numeric_limits<double>::quiet_NaN();
 constexpr const char* kFramePrefix = "frame_";
 
 }  // namespace
@@ -131,19 +134,28 @@ struct PointSeriesWriter::Impl {
     if (frame.positions.empty()) return;
     for (const auto& [name, values] : frame.scalars) {
       const FieldInfo field = field_info(name, "scalar field", kUnspecified);
-      double sum = 0.0;
-      for (double v : values) sum += v;
-      const auto [low, high] = std::minmax_element(values.begin(), values.end());
+      // NaN marks a value the solver does not compute for that point (e.g. the number density
+      // of a fluid's dummy particles): the statistics are over the points that have one, and
+      // NaN only when none has.
+      double sum = 0.0, low = kNotComputed, high = kNotComputed;
+      std::size_t computed = 0;
+      for (double v : values) {
+        if (std::isnan(v)) continue;
+        low = computed == 0 ? v : std::min(low, v);
+        high = computed == 0 ? v : std::max(high, v);
+        sum += v;
+        ++computed;
+      }
+      const double mean = computed > 0 ? sum / static_cast<double>(computed) : kNotComputed;
       const std::string prefix = kFramePrefix + name;
-      append_frame_series(
-          index, prefix + "_min", *low,
-          {field.unit, "smallest over the frame's points of: " + field.description, ""});
-      append_frame_series(
-          index, prefix + "_max", *high,
-          {field.unit, "largest over the frame's points of: " + field.description, ""});
-      append_frame_series(
-          index, prefix + "_mean", sum / static_cast<double>(values.size()),
-          {field.unit, "mean over the frame's points of: " + field.description, ""});
+      const std::string over =
+          " over the frame's points that have a value (NaN: not computed) of: ";
+      append_frame_series(index, prefix + "_min", low,
+                          {field.unit, "smallest" + over + field.description, ""});
+      append_frame_series(index, prefix + "_max", high,
+                          {field.unit, "largest" + over + field.description, ""});
+      append_frame_series(index, prefix + "_mean", mean,
+                          {field.unit, "mean" + over + field.description, ""});
     }
     for (const auto& [name, values] : frame.vectors) {
       const FieldInfo field = field_info(name, "vector field", kUnspecified);

@@ -8,6 +8,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <cmath>
 #include <limits>
 #include <random>
 #include <regex>
@@ -507,28 +508,46 @@ TEST_F(PointSeriesTest, FramesFillTheSeriesGroupWithTheirStatistics) {
   b.vectors["velocity"] = {{0, 0, 0}, {0, 12, 5}};
   PointFrame empty;
   empty.time = 0.5;
+  // NaN is a value not computed for that point: left out of the statistics, NaN if none has one.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  PointFrame partial = a;
+  partial.time = 0.75;
+  partial.scalars["pressure"] = {nan, 6.0, -1.0};
+  PointFrame none = a;
+  none.time = 1.0;
+  none.scalars["pressure"] = {nan, nan, nan};
   {
     PointSeriesWriter writer(stem, "statistics");
     writer.write_frame(a);
     writer.write_frame(b);
     writer.write_frame(empty);
+    writer.write_frame(partial);
+    writer.write_frame(none);
     EXPECT_THROW(writer.write_series("frame_points", {0.0}, {1.0}), std::invalid_argument);
   }
   const auto all = read_series(stem.string() + ".h5");
   const auto* points = find_series(all, "frame_points");
   ASSERT_NE(points, nullptr);
-  EXPECT_EQ(points->times, (std::vector<double>{0.0, 0.25, 0.5}));
-  EXPECT_EQ(points->values, (std::vector<double>{3, 2, 0}));
+  EXPECT_EQ(points->times, (std::vector<double>{0.0, 0.25, 0.5, 0.75, 1.0}));
+  EXPECT_EQ(points->values, (std::vector<double>{3, 2, 0, 3, 3}));
   const auto* low = find_series(all, "frame_pressure_min");
   const auto* high = find_series(all, "frame_pressure_max");
   const auto* mean = find_series(all, "frame_pressure_mean");
   const auto* speed = find_series(all, "frame_velocity_max_magnitude");
   ASSERT_TRUE(low && high && mean && speed);
-  EXPECT_EQ(low->values, (std::vector<double>{-2.0, 10.0}));
-  EXPECT_EQ(high->values, (std::vector<double>{4.0, 20.0}));
-  EXPECT_EQ(mean->values, (std::vector<double>{1.0, 15.0}));
-  EXPECT_EQ(speed->values, (std::vector<double>{5.0, 13.0}));
-  EXPECT_EQ(speed->times, (std::vector<double>{0.0, 0.25}));
+  ASSERT_EQ(low->values.size(), 4u);
+  ASSERT_EQ(high->values.size(), 4u);
+  ASSERT_EQ(mean->values.size(), 4u);
+  const std::vector<double> lows(low->values.begin(), low->values.begin() + 3);
+  const std::vector<double> highs(high->values.begin(), high->values.begin() + 3);
+  const std::vector<double> means(mean->values.begin(), mean->values.begin() + 3);
+  EXPECT_EQ(lows, (std::vector<double>{-2.0, 10.0, -1.0}));
+  EXPECT_EQ(highs, (std::vector<double>{4.0, 20.0, 6.0}));
+  EXPECT_EQ(means, (std::vector<double>{1.0, 15.0, 2.5}));
+  EXPECT_TRUE(std::isnan(low->values[3]) && std::isnan(high->values[3]) &&
+              std::isnan(mean->values[3]));
+  EXPECT_EQ(speed->values, (std::vector<double>{5.0, 13.0, 5.0, 5.0}));
+  EXPECT_EQ(speed->times, (std::vector<double>{0.0, 0.25, 0.75, 1.0}));
   EXPECT_EQ(all.size(), 5u);
 }
 
