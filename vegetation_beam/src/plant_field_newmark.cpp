@@ -92,10 +92,25 @@ void PlantField::locate_largest_residual(const std::vector<char>& converged,
   }
 }
 
+void PlantField::newmark_kinematics(double dt, double mass_weight) {
+  // Newmark relations (eq. 22-23) give acceleration and velocity from the trial position.
+  for (std::size_t k = 0; k < positions_.size(); ++k) {
+    if (node_mass_[k] == 0) continue;
+    accelerations_[k] =
+        (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
+        (0.5 / kBeta - 1.0) * previous_accelerations_[k];
+    velocities_[k] = previous_velocities_[k] +
+                     dt * ((1 - kGamma) * previous_accelerations_[k] + kGamma * accelerations_[k]);
+  }
+  for (const Plant& plant : plants_) {  // clamped base
+    accelerations_[plant.first].setZero();
+    velocities_[plant.first].setZero();
+  }
+}
+
 PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
                                                      const std::vector<Eigen::Vector3d>& ambient,
                                                      bool robust) {
-  const std::size_t n = positions_.size();
   NewtonOutcome outcome;
   const double mass_weight = 1.0 / (kBeta * dt * dt);
   const double damping_weight = kGamma / (kBeta * dt);
@@ -125,19 +140,7 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
   jacobians_.resize(plants_.size());
   for (int iteration = 1; iteration <= parameters_.max_newton_iterations; ++iteration) {
     outcome.iterations = iteration;
-    // Newmark relations (eq. 22-23) give acceleration and velocity from the trial position.
-    for (std::size_t k = 0; k < n; ++k) {
-      if (node_mass_[k] == 0) continue;
-      accelerations_[k] =
-          (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
-          (0.5 / kBeta - 1.0) * previous_accelerations_[k];
-      velocities_[k] = previous_velocities_[k] + dt * ((1 - kGamma) * previous_accelerations_[k] +
-                                                       kGamma * accelerations_[k]);
-    }
-    for (const Plant& plant : plants_) {  // clamped base
-      accelerations_[plant.first].setZero();
-      velocities_[plant.first].setZero();
-    }
+    newmark_kinematics(dt, mass_weight);
     if (contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
     bool all_converged = true;
     for (int p = 0; p < plant_count(); ++p) {
@@ -182,18 +185,7 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
       all_converged = all_converged && converged[p];
     }
     if (all_converged) {
-      for (std::size_t k = 0; k < n; ++k) {  // state consistent with the final position
-        if (node_mass_[k] == 0) continue;
-        accelerations_[k] =
-            (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
-            (0.5 / kBeta - 1.0) * previous_accelerations_[k];
-        velocities_[k] = previous_velocities_[k] + dt * ((1 - kGamma) * previous_accelerations_[k] +
-                                                         kGamma * accelerations_[k]);
-      }
-      for (const Plant& plant : plants_) {
-        accelerations_[plant.first].setZero();
-        velocities_[plant.first].setZero();
-      }
+      newmark_kinematics(dt, mass_weight);  // state consistent with the final position
       outcome.converged = true;
       return outcome;
     }

@@ -319,6 +319,9 @@ class PlantField {
   // One Newton attempt from the state in previous_*: constant-acceleration predictor with the
   // Jacobian of the first iteration kept (fast), or constant-velocity predictor with the
   // Jacobian refreshed when the correction falls by less than a factor 4 (robust).
+  // Accelerations and velocities of every free node from its trial position (Newmark, seed eq.
+  // 22-23; mass_weight = 1 / (beta dt^2)); the clamped bases at rest.
+  void newmark_kinematics(double dt, double mass_weight);
   NewtonOutcome newton_attempt(double dt, const std::vector<Eigen::Vector3d>& ambient, bool robust);
   // Plant and node with the largest residual among the plants not `converged`.
   void locate_largest_residual(const std::vector<char>& converged, NewtonOutcome& outcome) const;
