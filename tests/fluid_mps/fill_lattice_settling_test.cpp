@@ -11,25 +11,16 @@
 
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
+#include "quiet_settings.hpp"
 
 using namespace cosim::mps;
+using namespace cosim::mps::testing;
 
 namespace {
 
 struct Settling {
   double level_at_start = 0.0, level_at_end = 0.0, kinetic = 0.0;  // [m], [m], [J/kg]
 };
-
-double level(const FluidSystem& system) {
-  double height = 0.0;
-  int fluid = 0;
-  for (int i = 0; i < system.particle_count(); ++i) {
-    if (system.kinds()[i] != ParticleKind::fluid) continue;
-    height += system.positions()[i].z();
-    ++fluid;
-  }
-  return 2.0 * height / fluid;
-}
 
 double kinetic_energy(const FluidSystem& system) {
   double sum = 0.0;
@@ -58,13 +49,14 @@ Settling settle(MpsParameters::FillLattice lattice) {
   int samples = 0;
   while (system.time() < 1.5 - 1e-9) {
     system.step(system.stable_dt());
-    if (s.level_at_start == 0.0 && system.time() >= 0.2 - 1e-9) s.level_at_start = level(system);
+    if (s.level_at_start == 0.0 && system.time() >= 0.2 - 1e-9)
+      s.level_at_start = layer_level(system);
     if (system.time() >= 1.0) {
       s.kinetic += kinetic_energy(system);
       ++samples;
     }
   }
-  s.level_at_end = level(system);
+  s.level_at_end = layer_level(system);
   s.kinetic /= samples;
   return s;
 }

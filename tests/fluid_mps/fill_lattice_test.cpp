@@ -10,8 +10,10 @@
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/kernels.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
+#include "quiet_settings.hpp"
 
 using namespace cosim::mps;
+using namespace cosim::mps::testing;
 
 namespace {
 
@@ -24,12 +26,6 @@ MpsParameters fcc_parameters(double l0) {
   p.radius_laplacian_over_l0 = 3.1;
   p.fill_lattice = MpsParameters::FillLattice::fcc;
   return p;
-}
-
-int count(const FluidSystem& system, ParticleKind kind) {
-  int n = 0;
-  for (int i = 0; i < system.particle_count(); ++i) n += system.kinds()[i] == kind;
-  return n;
 }
 
 }  // namespace
@@ -63,7 +59,7 @@ TEST(MpsFillLattice, FccTankVolumeDensityAndWalls) {
   ParticleSet particles = still_water_tank_3d(p, length, width, depth, 0.25);
   for (int d = 0; d < 3; ++d) EXPECT_NEAR(p.fill_stretch[d], 1.0, 0.01);
   FluidSystem system(p, std::move(particles));
-  const int fluid = count(system, ParticleKind::fluid);
+  const int fluid = count_kind(system, ParticleKind::fluid);
   EXPECT_EQ(fluid, 10 * 10 * 20 / 2);  // 10 x 10 x 20 layers of h = 0.01 m, half of them sites
   const double volume = fill_volume_per_particle(system.parameters());
   EXPECT_NEAR(volume / (l0 * l0 * l0), p.fill_stretch.prod(), 1e-12);
@@ -88,7 +84,7 @@ TEST(MpsFillLattice, FccTankVolumeDensityAndWalls) {
   }
   EXPECT_GT(interior, fluid / 2);
   EXPECT_GT(walls, 0);
-  EXPECT_GT(count(system, ParticleKind::dummy), 0);
+  EXPECT_GT(count_kind(system, ParticleKind::dummy), 0);
   // The nearest pair is the fcc neighbour distance 2^(1/6) h-stretched, above the collision
   // distance 1.0 l0 of still_water_3d.
   double nearest = 1e9;
@@ -110,7 +106,7 @@ TEST(MpsFillLattice, FccDamBreakColumnKeepsItsVolume) {
   MpsParameters p = fcc_parameters(l0);
   ParticleSet particles = dam_break_3d(p, a, 2.0 * a, 0.3, a, 0.15);
   FluidSystem system(p, std::move(particles));
-  const int fluid = count(system, ParticleKind::fluid);
+  const int fluid = count_kind(system, ParticleKind::fluid);
   EXPECT_NEAR(fluid * fill_volume_per_particle(system.parameters()), 2.0 * a * a * a,
               1e-9 * a * a * a);
   double x_max = 0.0, z_max = 0.0;

@@ -21,6 +21,19 @@ inline MpsParameters quiet_parameters(double l0) {
   return p;
 }
 
+// The level of the water as a uniform layer on a floor at z = 0: twice the mean height of its
+// fluid particles [m] (the hydrostatic reference's water level, fluid_mps/process/references.cpp).
+inline double layer_level(const FluidSystem& system) {
+  double height = 0.0;
+  int fluid = 0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    height += system.positions()[i].z();
+    ++fluid;
+  }
+  return 2.0 * height / fluid;
+}
+
 inline int count_kind(const std::vector<ParticleKind>& kinds, ParticleKind kind) {
   return static_cast<int>(std::count(kinds.begin(), kinds.end(), kind));
 }

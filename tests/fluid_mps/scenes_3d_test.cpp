@@ -219,14 +219,7 @@ TEST(MpsScenes3d, StillWaterStartsHydrostatic) {
   const double mean = sum / samples, expected = p.density * 9.81 * 0.5 * depth;
   // The water level: twice the mean height of the water. Over this first 0.3 s the lattice holds
   // (it loosens and sinks later, by 1-2 mm over 1-2 s in the 0.1 m tank: docs/validation.md).
-  double height = 0.0;
-  int fluid = 0;
-  for (int i = 0; i < system.particle_count(); ++i) {
-    if (system.kinds()[i] != ParticleKind::fluid) continue;
-    height += system.positions()[i].z();
-    ++fluid;
-  }
-  const double level = 2.0 * height / fluid;
+  const double level = layer_level(system);
   std::cout << "[still water 3d] particles=" << system.particle_count()
             << " steps=" << system.step_count() << " p_mid=" << mean << " Pa (rho g h " << expected
             << " Pa) max_speed=" << max_speed << " m/s level=" << level << " m\n";
