@@ -10,6 +10,7 @@
 #include "chain_state.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/scenario/parameter_reader.hpp"
+#include "reference_keys.hpp"
 #include "references.hpp"
 #include "scene_3d.hpp"
 #include "scene_keys.hpp"
@@ -85,7 +86,13 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
     forbid(scene, "inflow", "kind: " + scene_kinds_where(has_inflow));
   }
   visit_scene_kind(kind, s, [&](auto& keys) { scenario::read_parameters(scene, keys); });
-  if (dimension == 3) {
+  const bool channel = kind == SceneKind::periodic_channel || kind == SceneKind::open_channel;
+  if (dimension == 3 && channel) {
+    // The 3D channel builders make the bed and side walls only (boundaries.hpp, Channel3d).
+    for (const char* key : {"obstacles", "solids"}) {
+      forbid(scene, key, "a 3D tank (kind: dam_break, still_water_tank, flume)");
+    }
+  } else if (dimension == 3) {
     for (auto& box :
          scene.has("obstacles") ? scene.list("obstacles") : std::vector<scenario::Section>{}) {
       ObstacleKeys corners;
@@ -131,9 +138,11 @@ SceneSettings parse_scene(scenario::Section scene, double gravity, int dimension
   if (dimension == 3 && kind != SceneKind::flume) {
     // tank_3d rounds each size to whole cells l0 and refuses a tank of no cell along one.
     const bool dam = kind == SceneKind::dam_break;
+    const auto along = dam       ? std::pair{"tank_length", s.tank_length}
+                       : channel ? std::pair{"length", s.length}
+                                 : std::pair{"width", s.width};
     for (const auto& [key, size] :
-         {std::pair{dam ? "tank_length" : "width", dam ? s.tank_length : s.width},
-          std::pair{"tank_width", s.tank_width}, std::pair{"tank_height", s.tank_height}}) {
+         {along, std::pair{"tank_width", s.tank_width}, std::pair{"tank_height", s.tank_height}}) {
       if (std::lround(size / spacing) < 1) {
         scene.fail(
             key, fmt::format("{} m is less than one cell of particle_spacing {} m", size, spacing));
@@ -158,9 +167,10 @@ double estimated_particles(const SceneSettings& s, const MpsParameters& p) {
   if (p.dimension == 3) {
     const double width = std::max(s.tank_width, l0);
     return (water * width + 2.0 * (length * height + length * width + height * width) * layers) /
-           (l0 * l0 * l0);
+               (l0 * l0 * l0) +
+           s.pool_particles;
   }
-  return (water + (2.0 * height + length) * layers) / (l0 * l0);
+  return (water + (2.0 * height + length) * layers) / (l0 * l0) + s.pool_particles;
 }
 
 // The process reads the frame at its start: an unreadable file or a frame it lacks is refused
@@ -238,6 +248,23 @@ ReferenceSettings parse_reference(scenario::Section& reference, const FluidConfi
   if (kind == ReferenceKind::weirs && scene != "pool_fishway" && scene != "periodic_pool") {
     reference.fail("kind", "weirs needs a pool_fishway or periodic_pool scene");
   }
+  if (kind == ReferenceKind::free_overfall) {
+    // Rouse's end depth is that of a free overfall from a horizontal bed at a known discharge.
+    const SceneSettings& s = config.scene;
+    if (scene != "open_channel")
+      reference.fail("kind", "free_overfall needs an open_channel scene");
+    if (s.inflow.control != OpenBoundarySettings::Control::discharge) {
+      reference.fail("kind",
+                     "free_overfall needs the inflow's control: discharge (q is its scale)");
+    }
+    if (!s.outlet.empty()) {
+      reference.fail("kind",
+                     "free_overfall needs the bed to end in the overfall (no outlet_ keys)");
+    }
+    if (std::abs(config.parameters.gravity.x()) > 1e-9 * config.parameters.gravity.norm()) {
+      reference.fail("kind", "free_overfall holds for a horizontal bed (world.slope_degrees: 0)");
+    }
+  }
   if (kind == ReferenceKind::canopy_balance) {
     if (!config.observation) reference.fail("kind", "canopy_balance needs `observe` points");
     if (scene != "periodic_channel") {
@@ -306,8 +333,13 @@ FluidConfig parse_config(scenario::Section& section, const scenario::Scene& worl
     if (config.parameters.dimension != 3) {
       section.fail("fill_lattice", "fcc is a 3D lattice (dimension: 3)");
     }
-    if (config.scene.kind == "flume") {  // its walls must stay on the debris' whole cells l0
+    const std::string& kind = config.scene.kind;
+    if (kind == "flume") {  // its walls must stay on the debris' whole cells l0
       section.fail("fill_lattice", "fcc fits its layers to the water; kind: flume needs cubic");
+    }
+    if (kind == "periodic_channel" || kind == "open_channel") {
+      section.fail("fill_lattice", "the 3D channels are built on the cubic lattice (kind: " + kind +
+                                       " needs cubic)");
     }
   }
   config.parameters.periodic.driving_pressure_drop = config.scene.driving_pressure_drop;

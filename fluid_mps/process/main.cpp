@@ -17,6 +17,7 @@
 #include "cosim/output/point_series.hpp"
 #include "fishway_report.hpp"
 #include "fluid_config.hpp"
+#include "overfall_report.hpp"
 #include "references.hpp"
 #include "scene_3d.hpp"
 
@@ -114,6 +115,8 @@ class FluidProcess final : public coupler::Solver {
       fishway_.emplace(scene.weirs, config_.parameters.particle_spacing,
                        config_.reference->average_from,
                        periodic ? scene.fill_discharge : scene.inflow.discharge, periodic);
+    } else if (config_.reference && config_.reference->kind == "free_overfall") {
+      overfall_.emplace(scene.length, scene.inflow.discharge, config_.reference->average_from);
     } else if (config_.reference) {
       // Gravity along the library's vertical: y of the 2D plane, z in 3D.
       const int dimension = config_.parameters.dimension;
@@ -153,6 +156,7 @@ class FluidProcess final : public coupler::Solver {
     if (reference_)
       reference_->observe(*system_, impulses_, observation_ ? &*observation_ : nullptr);
     if (fishway_) fishway_->observe(*system_, open_boundaries_.get());
+    if (overfall_) overfall_->observe(*system_, *open_boundaries_);
     for (const auto& solid : solids) {
       const auto velocity =
           system_->sample_velocity(solid.positions, config_.sample_radius, &water_);
@@ -173,6 +177,7 @@ class FluidProcess final : public coupler::Solver {
       }
     }
     if (fishway_) fishway_->report(report);
+    if (overfall_) overfall_->report(report);
     if (observation_) observation_->write_csv((output_dir_ / "observation_points.csv").string());
     auto& info = report.info();
     if (open_boundaries_) {
@@ -429,6 +434,7 @@ class FluidProcess final : public coupler::Solver {
   std::filesystem::path output_dir_;
   std::unique_ptr<mps::OpenBoundaries> open_boundaries_;
   std::optional<mps::FishwayReport> fishway_;
+  std::optional<mps::OverfallReport> overfall_;
   std::optional<mps::ObservationPoints> observation_;
   std::optional<mps::ReferenceTracker> reference_;
   int64_t steps_ = 0, pcg_iterations_ = 0;

@@ -14,7 +14,17 @@ std::vector<TriangleMesh> parse_stl_solids(scenario::Section& scene) {
   return scenario::read_stl_list(scene, "solids", "the fluid needs a solid's whole outline");
 }
 
-ParticleSet build_scene_3d(MpsParameters& parameters, const SceneSettings& scene) {
+ParticleSet build_scene_3d(MpsParameters& parameters, SceneSettings& scene) {
+  const Channel3d channel{scene.tank_width, scene.tank_height, scene.wall_layers,
+                          scene.dummy_layers};
+  // The bed slope is the world's gravity tilt, as in 2D.
+  if (scene.kind == "periodic_channel") {
+    return periodic_channel_3d(parameters, channel, scene.length, scene.depth);
+  }
+  if (scene.kind == "open_channel") {
+    return open_channel_3d(parameters, scene.inflow, channel, scene.length, scene.depth,
+                           scene.block_height, scene.block_columns, scene.pool_particles);
+  }
   // A flume is a tank whose water is a reservoir at its upstream end: the column of a dam break.
   const bool dam = scene.kind == "dam_break" || scene.kind == "flume";
   if (!dam && scene.kind != "still_water_tank") {

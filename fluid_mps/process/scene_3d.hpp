@@ -1,5 +1,5 @@
 // The 3D scenes of the fluid_mps section: a tank (scenes.hpp, tank_3d) holding a dam-break column
-// or still water, with the scenario's obstacle boxes and STL solids.
+// or still water, with the scenario's obstacle boxes and STL solids, or a channel.
 #pragma once
 
 #include "cosim/scenario/section.hpp"
@@ -16,7 +16,9 @@ std::vector<TriangleMesh> parse_stl_solids(scenario::Section& scene);
 
 // dam_break (and flume): the column [column_x, column_x + column_width] over the whole width,
 // column_height high; still_water_tank: `width` long (x), filled to `depth`. Water cells inside an
-// obstacle or a solid are solid.
-ParticleSet build_scene_3d(MpsParameters& parameters, const SceneSettings& scene);
+// obstacle or a solid are solid. periodic_channel and open_channel: the 3D channels of
+// boundaries.hpp, tank_width wide with side walls tank_height high (open_channel fills
+// scene.inflow's geometry).
+ParticleSet build_scene_3d(MpsParameters& parameters, SceneSettings& scene);
 
 }  // namespace cosim::mps

@@ -1,6 +1,6 @@
 // The nested keys of the `fluid_mps` section (the section's own keys, `scene` with one struct of
-// keys per kind, `scene.inflow`, `scene.obstacles`, `scene.solids`, `restart`, `partitions`,
-// `observe`, `reference` with one struct per kind), each declared once (visit_parameters,
+// keys per kind, `scene.inflow`, `scene.obstacles`, `scene.solids`, `restart`, `partitions`;
+// `observe` and `reference` are in reference_keys.hpp), each declared once (visit_parameters,
 // cosim/scenario/parameters.hpp): fluid_config.cpp reads them with their ranges and rules, and
 // `cosim keys` lists them. The checks that need another section or a file's contents (a
 // reference's scene, a restart's frames, whole cells of a 3D tank) stay in fluid_config.cpp.
@@ -97,16 +97,33 @@ struct StillWaterTankKeys {
   SceneSettings& scene;
   static constexpr bool builds_3d = true, has_inflow = false;
 };
-// A channel periodic along x, driven by the gravity tilt and a pressure drop (seed 000 3.1).
+// A channel periodic along x, driven by the gravity tilt and a pressure drop (seed 000 3.1); in
+// 3D between side walls tank_width apart and tank_height high (boundaries.hpp, Channel3d).
 struct PeriodicChannelKeys {
   SceneSettings& scene;
-  static constexpr bool builds_3d = false, has_inflow = false;
+  static constexpr bool builds_3d = true, has_inflow = false;
 };
-// A channel fed by seed 001's soluble moving wall, with a free outfall.
+// A channel fed by seed 001's soluble moving wall, with a free outfall; in 3D as the periodic
+// channel, the block across the whole width.
 struct OpenChannelKeys {
   SceneSettings& scene;
-  static constexpr bool builds_3d = false, has_inflow = true;
+  static constexpr bool builds_3d = true, has_inflow = true;
 };
+
+// The side walls of a 3D channel (periodic_channel, open_channel): tank_width (SceneKeys) apart,
+// this high above the bed.
+template <class V>
+void visit_channel_walls_3d(SceneSettings& s, V& v) {
+  using scenario::Key;
+  using scenario::Range;
+  v(Key("tank_height")
+        .unit("m")
+        .in(Range::positive())
+        .needed()
+        .only_with(s.dimension == 3, "dimension: 3")
+        .doc("of the side walls above the bed"),
+    s.tank_height);
+}
 // Seed 001's stepped pool-and-weir fishway, fed by the moving wall.
 struct PoolFishwayKeys {
   SceneSettings& scene;
@@ -280,6 +297,9 @@ void visit_parameters(P& p, V& v) {
   v(Key("depth").unit("m").in(Range::positive()).needed().doc("of the water"), s.depth);
   v(Key("driving_pressure_drop").unit("Pa").doc("p(x_min) - p(x_max) over one period"),
     s.driving_pressure_drop);
+  visit_channel_walls_3d(s, v);
+  v.rule("tank_height", s.dimension != 3 || s.tank_height >= s.depth,
+         "the side walls must reach the water's depth");
 }
 
 template <class P, class V>
@@ -300,20 +320,29 @@ void visit_parameters(P& p, V& v) {
     s.block_height);
   v(Key("block_columns").in(Range::between(1, 100)).doc("columns of the moving wall block"),
     s.block_columns);
-  v(Key("pool_particles").in(Range::between(1, 1e7)).doc("recycled particles for the inflow"),
+  v(Key("pool_particles")
+        .in(Range::between(1, 1e7))
+        .doc("recycled particles for the inflow (3D: the water in transit, a column of the block "
+             "is block_height x tank_width / particle_spacing^2 of them)"),
     s.pool_particles);
   // Seed 000 section 4's outlet beyond `length` (boundaries.hpp, ChannelOutlet).
+  const bool two_d = s.dimension == 2;
   v(Key("outlet_flat_length")
         .unit("m")
         .in(Range::non_negative())
+        .only_with(two_d, "dimension: 2 (a 3D channel ends in a free overfall)")
         .doc("a bed level in the world after the sloping reach; 0 with no slope: free overfall"),
     s.outlet.flat_length);
   v(Key("outlet_slope_height")
         .unit("m")
         .in(Range::non_negative())
+        .only_with(two_d, "dimension: 2 (a 3D channel ends in a free overfall)")
         .doc("height of the 1:1 adverse slope at the end of the level bed, free overfall at "
              "its crest; 0: none"),
     s.outlet.slope_height);
+  visit_channel_walls_3d(s, v);
+  v.rule("tank_height", s.dimension != 3 || s.tank_height >= s.block_height,
+         "the side walls must reach the top of the moving wall block (block_height)");
 }
 
 // The pools of both fishway kinds.
@@ -538,221 +567,6 @@ void visit_parameters(P& p, V& v) {
   v(Key("to").unit("m").needed().doc("the other end, world [x, z]"), p.b);
   v(Key("keep_walls").doc("cut fluid pairs only: the partition's walls are seen from both sides"),
     p.keep_walls);
-}
-
-// `observe`: Eulerian points recorded every window; the points are given in the world frame and
-// turned into the solver's by fluid_config.cpp.
-struct ObserveKeys {
-  ObservationSettings& observation;
-  std::vector<double> points;
-};
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, ObserveKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  using scenario::Range;
-  v(Key("points").unit("m").needed().doc("a flat list of world x, y, z triples"), p.points);
-  v.rule("points", !p.points.empty() && p.points.size() % 3 == 0,
-         "expected a flat list of x, y, z triples");
-  // fluid_config.cpp sets the default from l0 first.
-  v(Key("radius")
-        .unit("m")
-        .in(Range::positive())
-        .shown_default("2 particle_spacing")
-        .doc("velocity and water presence averaged within it"),
-    p.observation.radius);
-  v(Key("average_from").unit("s").in(Range::non_negative()).doc("time means start here"),
-    p.observation.average_from);
-}
-
-enum class ReferenceKind { martin_moyce, hydrostatic, canopy_balance, weirs, probe_series };
-inline constexpr scenario::Choices<ReferenceKind, 5> kReferenceKinds{
-    {{"martin_moyce", ReferenceKind::martin_moyce},
-     {"hydrostatic", ReferenceKind::hydrostatic},
-     {"canopy_balance", ReferenceKind::canopy_balance},
-     {"weirs", ReferenceKind::weirs},
-     {"probe_series", ReferenceKind::probe_series}}};
-
-struct ReferenceKeys {
-  ReferenceSettings& reference;
-  ReferenceKind kind = ReferenceKind::martin_moyce;
-};
-struct MartinMoyceKeys {
-  ReferenceSettings& reference;
-};
-struct HydrostaticKeys {
-  ReferenceSettings& reference;
-};
-struct CanopyBalanceKeys {
-  ReferenceSettings& reference;
-};
-struct WeirsKeys {
-  ReferenceSettings& reference;
-};
-struct ProbeSeriesKeys {
-  ReferenceSettings& reference;
-};
-
-template <class F>
-void visit_reference_kind(ReferenceKind kind, ReferenceSettings& reference, F&& f) {
-  switch (kind) {
-    case ReferenceKind::martin_moyce: {
-      MartinMoyceKeys keys{reference};
-      f(keys);
-      return;
-    }
-    case ReferenceKind::hydrostatic: {
-      HydrostaticKeys keys{reference};
-      f(keys);
-      return;
-    }
-    case ReferenceKind::canopy_balance: {
-      CanopyBalanceKeys keys{reference};
-      f(keys);
-      return;
-    }
-    case ReferenceKind::weirs: {
-      WeirsKeys keys{reference};
-      f(keys);
-      return;
-    }
-    case ReferenceKind::probe_series: {
-      ProbeSeriesKeys keys{reference};
-      f(keys);
-      return;
-    }
-  }
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, ReferenceKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  v(Key("kind").needed().doc(
-        "martin_moyce: surge front and residual column (dam_break); hydrostatic: pressure at "
-        "depth; canopy_balance: inflection at the canopy top (periodic_channel with observe); "
-        "weirs: Rehbock head at every crest (fishways); probe_series: sensors against a "
-        "measured record"),
-    p.kind, kReferenceKinds);
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, MartinMoyceKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  using scenario::Range;
-  v(Key("file").needed().doc("the measured curves (references/martin_moyce_1952.csv)"),
-    p.reference.file);
-  v(Key("column_width").unit("m").in(Range::positive()).needed().doc("a, the curves' scale"),
-    p.reference.column_width);
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, HydrostaticKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  using scenario::Range;
-  ReferenceSettings& r = p.reference;
-  v(Key("still_depth").unit("m").in(Range::positive()).needed().doc("of the still surface"),
-    r.still_depth);
-  v(Key("probe_x").unit("m").needed().doc("world x of the probes (y: mid-tank)"), r.probe_x);
-  v(Key("probe_depths").unit("m").in(Range::positive()).needed().doc("below the still surface"),
-    r.probe_depths);
-  v(Key("average_from").unit("s").in(Range::non_negative()).doc("time means start here"),
-    r.average_from);
-  // fluid_config.cpp sets the default from l0 first.
-  v(Key("probe_radius")
-        .unit("m")
-        .in(Range::positive())
-        .shown_default("1.5 particle_spacing")
-        .doc("particles within it are averaged"),
-    r.probe_radius);
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, CanopyBalanceKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  using scenario::Range;
-  v(Key("canopy_height")
-        .unit("m")
-        .in(Range::positive())
-        .needed()
-        .doc("where u(z) should inflect; time means from observe.average_from"),
-    p.reference.canopy_height);
-  // Nepf (2012) shear-layer penetration delta_e = 0.23 / (C_D a), reported when both are given.
-  v(Key("drag_coefficient")
-        .in(Range::non_negative())
-        .doc("C_D of the canopy's stems, for Nepf's delta_e; 0: not reported"),
-    p.reference.drag_coefficient);
-  v(Key("frontal_area")
-        .unit("1/m")
-        .in(Range::non_negative())
-        .doc("a = n d, frontal area per volume, for Nepf's delta_e; 0: not reported"),
-    p.reference.frontal_area);
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, WeirsKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  using scenario::Range;
-  v(Key("average_from").unit("s").in(Range::non_negative()).needed().doc("time means start here"),
-    p.reference.average_from);
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, ProbeSeriesKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  using scenario::Range;
-  ProbeSeriesSettings& s = p.reference.probes;
-  v(Key("file").needed().doc("the measured record: a CSV, '#' comments, a header, time first"),
-    p.reference.file);
-  // fluid_config.cpp sets the defaults from l0 first.
-  v(Key("probe_radius")
-        .unit("m")
-        .in(Range::positive())
-        .shown_default("1.5 particle_spacing")
-        .doc("a pressure probe averages fluid and wall particles within it"),
-    s.probe_radius);
-  v(Key("gauge_half_width")
-        .unit("m")
-        .in(Range::positive())
-        .shown_default("2 particle_spacing")
-        .doc("half-width of a depth gauge's bilinear tent"),
-    s.gauge_half_width);
-  v(Key("arrival_fraction")
-        .in(Range{0.0, 1.0, true})
-        .doc("arrival: the first time a probe reads this fraction of its measured peak"),
-    s.arrival_fraction);
-}
-
-// A `reference.pressure_probes` or `reference.depth_gauges` entry, as the scenario gives it.
-struct PressureProbeKeys {
-  std::string column;
-  Eigen::Vector3d at = Eigen::Vector3d::Zero();
-};
-struct DepthGaugeKeys {
-  std::string column;
-  Eigen::Vector2d at = Eigen::Vector2d::Zero();
-};
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, PressureProbeKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  v(Key("column").needed().doc("of the measured record"), p.column);
-  v(Key("at").unit("m").needed().doc("world [x, y, z] of the sensor"), p.at);
-}
-
-template <class P, class V>
-requires std::same_as<std::remove_const_t<P>, DepthGaugeKeys>
-void visit_parameters(P& p, V& v) {
-  using scenario::Key;
-  v(Key("column").needed().doc("of the measured record"), p.column);
-  v(Key("at").unit("m").needed().doc("world [x, y] of the gauge; its depth is along z"), p.at);
 }
 
 }  // namespace cosim::mps

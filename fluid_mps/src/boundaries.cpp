@@ -108,13 +108,16 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
       rows_(settings.inflow_rows),
       last_dissolution_time_(system.time()) {
   const OpenBoundarySettings& s = settings_;
-  if (system.parameters().dimension != 2) {
-    throw std::invalid_argument("OpenBoundaries: 2D only");
+  const int dimension = system.parameters().dimension;
+  const double l0 = system.parameters().particle_spacing;
+  up_ = dimension - 1;
+  if (dimension == 3) {
+    if (!(s.width > 0.0)) throw std::invalid_argument("OpenBoundaries: 3D needs width > 0");
+    across_ = std::max(1, static_cast<int>(std::lround(s.width / l0)));
   }
   if (s.block_rows < 1 || s.inflow_rows < 1 || s.inflow_rows > s.block_rows) {
     throw std::invalid_argument("OpenBoundaries: need 1 <= inflow_rows <= block_rows");
   }
-  const double l0 = system.parameters().particle_spacing;
   if (s.level_window <= 0.0) settings_.level_window = 8.0 * l0;
   if (s.level_offset < 0.0) settings_.level_offset = 2.0 * l0;
   if (s.control == OpenBoundarySettings::Control::discharge) {
@@ -127,7 +130,9 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
   }
   for (int i = 0; i < system.particle_count(); ++i) {
     const Eigen::Vector3d& x = system.positions()[i];
-    if (system.kinds()[i] == ParticleKind::wall && x.x() < s.inflow_x && x.y() > s.bed_y) {
+    const bool inside = dimension == 2 || (x.y() > 0.0 && x.y() < s.width);
+    if (system.kinds()[i] == ParticleKind::wall && x.x() < s.inflow_x && height(x) > s.bed_height &&
+        inside) {
       block_.push_back(i);
     }
   }
@@ -165,9 +170,13 @@ int OpenBoundaries::pool_size() const {
       std::count(system_.kinds().begin(), system_.kinds().end(), ParticleKind::inactive));
 }
 
+double OpenBoundaries::particle_volume() const {
+  const auto& p = system_.parameters();
+  return std::pow(p.particle_spacing, p.dimension);
+}
+
 double OpenBoundaries::inflow_volume() const {
-  const double l0 = system_.parameters().particle_spacing;
-  return static_cast<double>(dissolved_total_) * l0 * l0;
+  return static_cast<double>(dissolved_total_) * particle_volume();
 }
 
 int remove_fluid_beyond(FluidSystem& system, double outlet_x) {
@@ -190,7 +199,7 @@ BoundaryUpdate OpenBoundaries::update() {
   for (int i = 0; i < system_.particle_count(); ++i) {
     if (system_.kinds()[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d x = system_.positions()[i];
-    if (x.x() > s.outflow_x || x.y() < s.outflow_y_min) {
+    if (x.x() > s.outflow_x || height(x) < s.outflow_min_height) {
       system_.set_particle(i, ParticleKind::inactive, x, Eigen::Vector3d::Zero());
       ++result.recycled;
     }
@@ -215,18 +224,20 @@ BoundaryUpdate OpenBoundaries::update() {
   for (int i = 0; i < system_.particle_count(); ++i) {
     if (system_.kinds()[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = system_.positions()[i];
-    if (x.x() < x0 || x.x() >= x1 || x.y() < s.bed_y) continue;
-    top = std::max(top, x.y());
+    if (x.x() < x0 || x.x() >= x1 || height(x) < s.bed_height) continue;
+    top = std::max(top, height(x));
     ++inside;
   }
+  // Mean depth: the water's volume in the window over its bed area (area over length in 2D).
+  const double bed_area = s.level_window * (up_ == 2 ? s.width : 1.0);
+  const double mean_depth = inside * particle_volume() / bed_area;
   if (s.level_measure == OpenBoundarySettings::LevelMeasure::highest) {
-    level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_y : 0.0;
+    level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_height : 0.0;
   } else {
-    level_ = inside * l0 * l0 / s.level_window;
+    level_ = mean_depth;
   }
   // Water above the block would pour back over it: the inflow cannot hold that level. The mean
   // depth is used whatever the control measures, so a single splash does not count.
-  const double mean_depth = inside * l0 * l0 / s.level_window;
   if (mean_depth > s.block_rows * l0) {
     throw std::runtime_error("soluble moving wall: the water level " + std::to_string(mean_depth) +
                              " m at the inflow is above the block height " +
@@ -262,7 +273,7 @@ BoundaryUpdate OpenBoundaries::update() {
   for (int i : passed) {
     const Eigen::Vector3d x = system_.positions()[i];
     const Eigen::Vector3d u = system_.velocities()[i];
-    const int row = static_cast<int>(std::floor((x.y() - s.bed_y) / l0));
+    const int row = static_cast<int>(std::floor((height(x) - s.bed_height) / l0));
     if (row < rows_) {
       system_.set_particle(i, ParticleKind::fluid, x, u);
       ++result.dissolved;
@@ -274,19 +285,25 @@ BoundaryUpdate OpenBoundaries::update() {
   // New columns behind the block, one per dissolved column, l0 apart.
   if (!std::isfinite(column_x)) column_x = passed_x.front();
   block_ = kept;
-  for (int c = 1; c <= columns; ++c) {
-    const double x = column_x - c * l0;
-    for (int row = 0; row < s.block_rows; ++row) {
+  for (int c = 1; c <= columns; ++c) add_column(column_x - c * l0, result);
+  set_block_velocity();
+  return result;
+}
+
+void OpenBoundaries::add_column(double x, BoundaryUpdate& result) {
+  const double l0 = system_.parameters().particle_spacing;
+  for (int row = 0; row < settings_.block_rows; ++row) {
+    for (int k = 0; k < across_; ++k) {
+      Eigen::Vector3d position(x, 0.0, 0.0);
+      position[up_] = settings_.bed_height + (row + 0.5) * l0;
+      if (up_ == 2) position.y() = (k + 0.5) * settings_.width / across_;
       const int i = take_from_pool();
-      system_.set_particle(i, ParticleKind::wall,
-                           Eigen::Vector3d(x, s.bed_y + (row + 0.5) * l0, 0.0),
+      system_.set_particle(i, ParticleKind::wall, position,
                            Eigen::Vector3d(wall_speed(), 0.0, 0.0));
       block_.push_back(i);
       ++result.created;
     }
   }
-  set_block_velocity();
-  return result;
 }
 
 }  // namespace cosim::mps

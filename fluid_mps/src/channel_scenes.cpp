@@ -31,7 +31,50 @@ void tilt_gravity(MpsParameters& parameters, double slope) {
 }
 
 void require_2d(const MpsParameters& p) {
-  if (p.dimension != 2) throw std::invalid_argument("channel scenes are 2D (dimension = 2)");
+  if (p.dimension != 2) {
+    throw std::invalid_argument("periodic_channel, open_channel: dimension = 2 (3D: the _3d ones)");
+  }
+}
+
+void require_3d(const MpsParameters& p, const Channel3d& channel) {
+  if (p.dimension != 3) throw std::invalid_argument("3D channel scenes need dimension = 3");
+  if (channel.wall_layers < 1 || channel.dummy_layers < 0) {
+    throw std::invalid_argument("3D channel scenes: at least one wall layer, no negative dummies");
+  }
+  if (cells(channel.width, p.particle_spacing) < 1) {
+    throw std::invalid_argument("3D channel scenes: the width must hold at least one cell l0");
+  }
+}
+
+// The bed (z < 0) and side walls (y < 0, y > width; up to wall_height) of a 3D channel over the
+// cell columns ix in [first, last): a cell (iy, iz) outside the channel's open section
+// (0 <= iy < ny, iz >= 0) is wall within wall_layers cells (Chebyshev distance, as tank_3d),
+// dummy within wall_layers + dummy_layers, left out beyond. In the order z, y, x.
+void add_channel_walls_3d(ParticleSet& set, double l0, const Channel3d& channel, int first,
+                          int last) {
+  const int ny = cells(channel.width, l0), nz = cells(channel.wall_height, l0);
+  const int layers = channel.wall_layers + channel.dummy_layers;
+  for (int iz = -layers; iz < nz; ++iz) {
+    for (int iy = -layers; iy < ny + layers; ++iy) {
+      const int dy = iy < 0 ? -iy : std::max(0, iy - ny + 1);
+      const int distance = std::max(dy, iz < 0 ? -iz : 0);
+      if (distance == 0) continue;
+      const ParticleKind kind =
+          distance <= channel.wall_layers ? ParticleKind::wall : ParticleKind::dummy;
+      for (int ix = first; ix < last; ++ix) {
+        set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, (iz + 0.5) * l0), kind);
+      }
+    }
+  }
+}
+
+// Particles of `kind` filling the cells ix in [first, last), iy in [0, ny), iz in [0, rows).
+void add_block_3d(ParticleSet& set, double l0, int first, int last, int ny, int rows,
+                  ParticleKind kind) {
+  for (int iz = 0; iz < rows; ++iz)
+    for (int iy = 0; iy < ny; ++iy)
+      for (int ix = first; ix < last; ++ix)
+        set.add(Eigen::Vector3d((ix + 0.5) * l0, (iy + 0.5) * l0, (iz + 0.5) * l0), kind);
 }
 
 // The outlet's bed line in the channel frame (x along the tilted bed, y normal to it): from
@@ -153,14 +196,72 @@ ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settin
   const Eigen::Vector3d park((end_column + 5) * l0, -(layers + 6) * l0, 0.0);
   for (int k = 0; k < pool_particles; ++k) set.add(park, ParticleKind::inactive);
   settings.inflow_x = 0.0;
-  settings.bed_y = 0.0;
+  settings.bed_height = 0.0;
   settings.block_rows = rows;
   settings.outflow_x = (end_column + 4) * l0;
-  settings.outflow_y_min = -(layers + 4) * l0;
+  settings.outflow_min_height = -(layers + 4) * l0;
   if (parameters.domain.isEmpty()) {
     parameters.domain = Eigen::AlignedBox3d(
         Eigen::Vector3d(-(block_columns + layers + 4) * l0, -(layers + 8) * l0, -l0),
         Eigen::Vector3d((end_column + 7) * l0, 2.0 * block_height + 10.0 * l0, l0));
+  }
+  return set;
+}
+
+ParticleSet periodic_channel_3d(MpsParameters& parameters, const Channel3d& channel, double length,
+                                double depth) {
+  require_3d(parameters, channel);
+  const double l0 = parameters.particle_spacing;
+  const int nx = cells(length, l0), ny = cells(channel.width, l0);
+  if (nx < 1) throw std::invalid_argument("periodic_channel_3d: the length must hold a cell l0");
+  ParticleSet set;
+  add_block_3d(set, l0, 0, nx, ny, cells(depth, l0), ParticleKind::fluid);
+  add_channel_walls_3d(set, l0, channel, 0, nx);
+  parameters.periodic.enabled = true;
+  parameters.periodic.x_min = 0.0;
+  parameters.periodic.x_max = nx * l0;
+  if (parameters.domain.isEmpty()) {
+    const double margin = (channel.wall_layers + channel.dummy_layers + 2) * l0;
+    const double top = std::max(3.0 * depth, channel.wall_height) + 10.0 * l0;
+    parameters.domain = Eigen::AlignedBox3d(Eigen::Vector3d(-l0, -margin, -margin),
+                                            Eigen::Vector3d((nx + 1) * l0, ny * l0 + margin, top));
+  }
+  return set;
+}
+
+ParticleSet open_channel_3d(MpsParameters& parameters, OpenBoundarySettings& settings,
+                            const Channel3d& channel, double length, double initial_depth,
+                            double block_height, int block_columns, int pool_particles) {
+  require_3d(parameters, channel);
+  const double l0 = parameters.particle_spacing;
+  const int nx = cells(length, l0), ny = cells(channel.width, l0);
+  const int rows = cells(block_height, l0);
+  const int layers = channel.wall_layers + channel.dummy_layers;
+  if (nx < 1) throw std::invalid_argument("open_channel_3d: the length must hold a cell l0");
+  if (rows < 1 || block_columns < 1) throw std::invalid_argument("open_channel_3d: empty block");
+  ParticleSet set;
+  add_block_3d(set, l0, 0, nx, ny, cells(initial_depth, l0), ParticleKind::fluid);
+  // Soluble moving wall block just upstream of the inflow line x = 0 (seed 001 section 2.2(3)).
+  add_block_3d(set, l0, -block_columns, 0, ny, rows, ParticleKind::wall);
+  add_channel_walls_3d(set, l0, channel, -(block_columns + 2), nx);
+  // Pool of recycled particles, parked under the overfall.
+  const Eigen::Vector3d park((nx + 5) * l0, 0.5 * ny * l0, -(layers + 6) * l0);
+  for (int k = 0; k < pool_particles; ++k) set.add(park, ParticleKind::inactive);
+  settings.inflow_x = 0.0;
+  settings.bed_height = 0.0;
+  settings.width = ny * l0;
+  settings.block_rows = rows;
+  settings.outflow_x = (nx + 3) * l0;
+  settings.outflow_min_height = -(layers + 4) * l0;
+  if (parameters.domain.isEmpty()) {
+    // Past the brink the side walls end and the falling water spreads sideways as well as
+    // downstream until the outflow takes it: as far across as it falls (a free fall from
+    // the block's height).
+    const double margin = (layers + 2) * l0, spread = margin + 2.0 * block_height;
+    const double top = std::max(2.0 * block_height, channel.wall_height) + 10.0 * l0;
+    parameters.domain = Eigen::AlignedBox3d(
+        Eigen::Vector3d(-(block_columns + layers + 4) * l0, -spread, -(layers + 8) * l0),
+        Eigen::Vector3d((nx + 7) * l0, ny * l0 + spread, top));
   }
   return set;
 }

@@ -125,15 +125,15 @@ ParticleSet pool_fishway(MpsParameters& parameters, OpenBoundarySettings& inflow
              g.pool_length / 3.0);
   }
   inflow.inflow_x = 0.0;
-  inflow.bed_y = 0.0;
+  inflow.bed_height = 0.0;
   inflow.block_rows = block_rows;
   inflow.outflow_x = (end_column + 3) * l0;
-  inflow.outflow_y_min = (lowest - layers - 4) * l0;
-  const Eigen::Vector3d park(inflow.outflow_x + l0, inflow.outflow_y_min - 2.0 * l0, 0.0);
+  inflow.outflow_min_height = (lowest - layers - 4) * l0;
+  const Eigen::Vector3d park(inflow.outflow_x + l0, inflow.outflow_min_height - 2.0 * l0, 0.0);
   for (int i = 0; i < g.pool_particles; ++i) set.add(park, ParticleKind::inactive);
   if (parameters.domain.isEmpty()) {
     parameters.domain = Eigen::AlignedBox3d(
-        Eigen::Vector3d((first_column - layers - 4) * l0, inflow.outflow_y_min - 6.0 * l0, -l0),
+        Eigen::Vector3d((first_column - layers - 4) * l0, inflow.outflow_min_height - 6.0 * l0, -l0),
         Eigen::Vector3d(inflow.outflow_x + 4.0 * l0, 2.0 * block_rows * l0 + 10.0 * l0, l0));
   }
   return set;

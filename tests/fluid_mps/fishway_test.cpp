@@ -76,7 +76,7 @@ TEST(Fishway, PoolFishwayGeometry) {
         << "at (" << x.x() << ", " << x.y() << ")";
   }
   EXPECT_GT(interior, 3000);
-  EXPECT_LT(inflow.outflow_y_min, -2 * 8 * l0);
+  EXPECT_LT(inflow.outflow_min_height, -2 * 8 * l0);
   EXPECT_GT(inflow.outflow_x, 3 * 45 * l0);
 }
 

@@ -160,7 +160,8 @@ TEST(ValidateAgrees, FluidAndDebrisBeyondTheMachinesMemoryAreRefusedByValidate) 
                  "key 'participants.debris_dem.packing.spheres[", "debris_dem needs about");
 }
 
-// The fluid's nested keys are read from their declarations (fluid_mps/process/scene_keys.hpp):
+// The fluid's nested keys are read from their declarations (fluid_mps/process/scene_keys.hpp and
+// reference_keys.hpp):
 // a key of another scene kind, inflow control, dimension or reference kind is refused as "only
 // used with ..." (it used to be an "unknown key", or not refused at all), and every refusal names
 // the file, the line and the dotted key.

@@ -10,6 +10,7 @@
 #include "cosim/scenario/parameters.hpp"
 #include "cosim/scenario/scene.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
+#include "reference_keys.hpp"
 #include "scene_keys.hpp"
 #include "section_keys.hpp"
 #include "structure_keys.hpp"
@@ -100,6 +101,7 @@ std::vector<Group> debris_groups() {
 
 std::vector<Group> fluid_groups() {
   const char* scene_keys = "fluid_mps/process/scene_keys.hpp";
+  const char* reference_keys = "fluid_mps/process/reference_keys.hpp";
   mps::FluidConfig config_defaults;
   mps::SceneSettings scene_defaults;
   mps::ReferenceSettings reference_defaults;
@@ -135,20 +137,20 @@ std::vector<Group> fluid_groups() {
       "restart."));
   groups.push_back(group<mps::PartitionSegment>("Thin partitions, one per `partitions` entry",
                                                 scene_keys, "partitions[]."));
-  groups.push_back(group("Observation points", scene_keys, "observe.",
+  groups.push_back(group("Observation points", reference_keys, "observe.",
                          mps::ObserveKeys{observation_defaults, {}}));
   groups.push_back(
-      group("The reference", scene_keys, "reference.", mps::ReferenceKeys{reference_defaults}));
+      group("The reference", reference_keys, "reference.", mps::ReferenceKeys{reference_defaults}));
   for (const auto& kind : mps::kReferenceKinds) {
     mps::visit_reference_kind(kind.value, reference_defaults, [&](const auto& keys) {
-      groups.push_back(group(fmt::format("The reference with kind: {}", kind.name), scene_keys,
+      groups.push_back(group(fmt::format("The reference with kind: {}", kind.name), reference_keys,
                              "reference.", keys));
     });
   }
   Group sensors = group<mps::PressureProbeKeys>(
       "Sensors of kind: probe_series, one per `reference.pressure_probes` or "
       "`reference.depth_gauges` entry",
-      scene_keys, "reference.pressure_probes[].");
+      reference_keys, "reference.pressure_probes[].");
   add_rows<mps::DepthGaugeKeys>(sensors, "reference.depth_gauges[].");
   groups.push_back(std::move(sensors));
   return groups;

@@ -39,14 +39,20 @@ bool crosses_partition(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                        const PartitionSegment& segment);
 
 // Settings of the soluble moving wall inflow (Gotoh et al., seed 001 section 2.2(3)) and of the
-// free outflow. Geometry: bed surface at y = bed_y, inflow line x = inflow_x, flow along +x.
+// free outflow. Geometry: flow along +x, inflow line x = inflow_x, bed surface at the height
+// bed_height along the vertical, which is y in 2D and z in 3D ("height" below means that
+// coordinate). In 3D the channel runs across y from 0 to `width` between side walls.
 struct OpenBoundarySettings {
   double inflow_x = 0.0;
-  double bed_y = 0.0;
-  // Particles of the moving wall block: wall particles with x < inflow_x and y > bed_y at
-  // construction. Each column that passes inflow_x dissolves: its lowest n rows (see control)
-  // become fluid with the wall velocity, the rest return to the pool, and a new column of
-  // `block_rows` wall particles (from the pool) is added l0 behind the last column.
+  double bed_height = 0.0;
+  // 3D: the channel's width across y [m]; the block is the wall particles with 0 < y < width,
+  // and a new column holds round(width / l0) particles across in each row. Unused in 2D.
+  double width = 0.0;
+  // Particles of the moving wall block: wall particles with x < inflow_x and a height above
+  // bed_height at construction (in 3D also inside the width). Each column that passes inflow_x
+  // dissolves: its lowest n rows (see control) become fluid with the wall velocity, the rest
+  // return to the pool, and a new column of `block_rows` rows of wall particles (from the pool)
+  // is added l0 behind the last column.
   int block_rows = 10;
   // How the inflow is set.
   //  velocity:  fixed wall velocity `velocity` and `inflow_rows` rows per column;
@@ -61,11 +67,12 @@ struct OpenBoundarySettings {
   Control control = Control::discharge;
   double velocity = 0.1;  // [m/s]; initial value for discharge / level control
   int inflow_rows = 5;
-  double discharge = 0.0;     // q per unit width [m^2/s] (2D)
-  double target_level = 0.0;  // [m] above bed_y
+  double discharge = 0.0;     // q per unit width [m^2/s] (in 3D the whole inflow is q width)
+  double target_level = 0.0;  // [m] above bed_height
   // Level measurement window [inflow_x + level_offset, + level_window] (defaults 2 l0 and 8 l0;
   // seed 001 uses a short section of 3 % of its domain length). mean_depth: fluid area in the
-  // window / window length (default: unbiased, smooth); highest: highest fluid particle + l0/2
+  // window / window length, in 3D fluid volume / (window length x width) (default: unbiased,
+  // smooth); highest: highest fluid particle + l0/2
   // (seed 001's choice; splashes bias it upwards and the just-released column dominates it).
   enum class LevelMeasure { mean_depth, highest };
   LevelMeasure level_measure = LevelMeasure::mean_depth;
@@ -77,10 +84,11 @@ struct OpenBoundarySettings {
   // Soft start: the wall speed rises linearly from 0 at t = 0 to full at ramp_time [s] (0: none).
   // A wall started impulsively into still water throws up a spout at high inflows.
   double ramp_time = 0.0;
-  // Free outflow: fluid particles with x > outflow_x or y < outflow_y_min leave the flow and are
-  // kept in the pool (kind inactive, velocity 0) for the inflow to reuse (seed 001 section 2.2(3)).
+  // Free outflow: fluid particles with x > outflow_x or a height below outflow_min_height leave the
+  // flow and are kept in the pool (kind inactive, velocity 0) for the inflow to reuse (seed 001
+  // section 2.2(3)).
   double outflow_x = std::numeric_limits<double>::infinity();
-  double outflow_y_min = -std::numeric_limits<double>::infinity();
+  double outflow_min_height = -std::numeric_limits<double>::infinity();
 };
 
 // Result of one OpenBoundaries::update.
@@ -103,10 +111,10 @@ class OpenBoundaries {
   double velocity() const { return velocity_; }
   double wall_speed() const;
   int inflow_rows() const { return rows_; }
-  double measured_level() const { return level_; }  // last level above bed_y [m]
+  double measured_level() const { return level_; }  // last level above bed_height [m]
   long dissolved_total() const { return dissolved_total_; }
   long recycled_total() const { return recycled_total_; }
-  // Fluid volume (area in 2D) released at the inflow so far [m^3, m^2 in 2D].
+  // Fluid volume (area in 2D) released at the inflow so far [m^3, m^2 in 2D]: l0^d a particle.
   double inflow_volume() const;
   int pool_size() const;
   const std::vector<int>& block() const { return block_; }
@@ -115,9 +123,16 @@ class OpenBoundaries {
  private:
   int take_from_pool();
   void set_block_velocity();
+  double height(const Eigen::Vector3d& x) const { return x[up_]; }
+  // Fluid volume per particle [m^3, m^2 in 2D]: the lattice cell, l0^dimension.
+  double particle_volume() const;
+  // Adds one new block column at x (every row, and in 3D every position across the width).
+  void add_column(double x, BoundaryUpdate& result);
 
   FluidSystem& system_;
   OpenBoundarySettings settings_;
+  int up_ = 1;      // the vertical axis: y in 2D, z in 3D
+  int across_ = 1;  // particles across the width in a row (1 in 2D)
   std::vector<int> block_;
   double velocity_;
   int rows_;
@@ -146,11 +161,10 @@ struct ChannelOutlet {
 // `outlet` beyond it, whose solid cells get walls and dummies as the fishway's); inflow line
 // at x = 0; a block of block_columns x block_rows wall particles just upstream of it; still water
 // of `initial_depth` on x in [0, length]; `pool_particles` inactive particles parked under the
-// outlet. Fills parameters.domain if empty and `settings` (inflow_x = 0, bed_y = 0, block_rows,
-// outflow_x = length + 3 l0, outflow_y_min = -(layers + 4) l0). slope = sin(theta) tilts
-// gravity as in periodic_channel.
-// With an outlet the still water fills its open cells to the same initial depth and the outflow
-// line lies 3 l0 beyond the crest.
+// outlet. Fills parameters.domain if empty and `settings` (inflow_x = 0, bed_height = 0,
+// block_rows, outflow_x = length + 3 l0, outflow_min_height = -(layers + 4) l0). slope = sin(theta)
+// tilts gravity as in periodic_channel. With an outlet the still water fills its open cells to the
+// same initial depth and the outflow line lies 3 l0 beyond the crest.
 ParticleSet open_channel(MpsParameters& parameters, OpenBoundarySettings& settings, double length,
                          double initial_depth, double block_height, int block_columns = 4,
                          int pool_particles = 400, int wall_layers = 2, int dummy_layers = 2,
@@ -167,5 +181,30 @@ Eigen::Vector3d outlet_crest(const MpsParameters& parameters, double length,
 // Enables parameters.periodic and fills parameters.domain if empty.
 ParticleSet periodic_channel(MpsParameters& parameters, double length, double depth,
                              double slope = 0.0, int wall_layers = 2, int dummy_layers = 2);
+
+// A straight 3D channel's cross-section and walls (x along the flow, y across, z up, the bed
+// slope in the world's gravity): the bed z < 0 and side walls y < 0 and y > width, each
+// wall_layers of wall and dummy_layers of dummy particles on the cubic lattice of cells l0
+// wide; the side walls reach wall_height above the bed.
+struct Channel3d {
+  double width = 0;        // between the side walls [m]
+  double wall_height = 0;  // of the side walls above the bed [m]
+  int wall_layers = 2, dummy_layers = 2;
+};
+
+// Scene: periodic_channel in 3D: x in [0, length) periodic, still water `depth` deep across
+// the whole width. Enables parameters.periodic and fills parameters.domain if empty.
+ParticleSet periodic_channel_3d(MpsParameters& parameters, const Channel3d& channel, double length,
+                                double depth);
+
+// Scene: open_channel in 3D: as open_channel, the bed and side walls from
+// x = -(block_columns + 2) l0 to x = length (a free overfall there), a block of block_columns
+// columns of block_height rows across the whole width just upstream of x = 0, still water of
+// initial_depth on x in [0, length), and pool_particles parked below the overfall. Fills
+// parameters.domain if empty and `settings` (inflow_x = 0, bed_height = 0, width, block_rows,
+// outflow_x = length + 3 l0, outflow_min_height = -(layers + 4) l0).
+ParticleSet open_channel_3d(MpsParameters& parameters, OpenBoundarySettings& settings,
+                            const Channel3d& channel, double length, double initial_depth,
+                            double block_height, int block_columns = 4, int pool_particles = 4000);
 
 }  // namespace cosim::mps
