@@ -145,23 +145,9 @@ TEST(MpsChannels3d, DischargeControlDeliversPrescribedDischarge) {
   const int total = system.particle_count();
   const int fluid0 = count_kind(system, ParticleKind::fluid);
   GaugeLine gauge(0.075);
-  const double t1 = 1.0, t2 = 2.0;
-  double inflow1 = 0.0;
-  long gauge1 = 0;
-  bool started = false;
-  while (system.time() < t2) {
-    system.step(system.stable_dt());
-    boundaries.update();
-    gauge.update(system);
-    if (!started && system.time() >= t1) {
-      started = true;
-      inflow1 = boundaries.inflow_volume();
-      gauge1 = gauge.net_particles();
-    }
-  }
-  const double span = system.time() - t1;
-  const double q_in = (boundaries.inflow_volume() - inflow1) / span / width;
-  const double q_gauge = (gauge.net_particles() - gauge1) * l0 * l0 * l0 / span / width;
+  const DischargeCount count = count_discharge(system, boundaries, gauge, 1.0, 2.0);
+  const double q_in = count.inflow / count.seconds / width;
+  const double q_gauge = count.gauge / count.seconds / width;
   std::cout << "[3D discharge control] q=" << q << " inflow " << q_in << " gauge " << q_gauge
             << " m^2/s; wall velocity " << boundaries.velocity() << " m/s rows "
             << boundaries.inflow_rows() << " level " << boundaries.measured_level()

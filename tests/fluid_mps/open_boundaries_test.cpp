@@ -61,28 +61,14 @@ TEST(MpsOpenBoundaries, DischargeControlDeliversPrescribedDischarge) {
   const int total = system.particle_count();
   const int fluid0 = count_kind(system, ParticleKind::fluid);
   GaugeLine gauge(0.15);
-  const double t1 = 1.5, t2 = 4.0;
-  double inflow1 = 0.0, line_sum = 0.0;
-  long gauge1 = 0;
+  double line_sum = 0.0;
   int line_samples = 0;
-  bool started = false;
-  while (system.time() < t2) {
-    system.step(system.stable_dt());
-    boundaries.update();
-    gauge.update(system);
-    if (!started && system.time() >= t1) {
-      started = true;
-      inflow1 = boundaries.inflow_volume();
-      gauge1 = gauge.net_particles();
-    }
-    if (started) {
-      line_sum += discharge_through_line(system, 0.15, 0.0, 1.0, 2.0 * l0);
-      ++line_samples;
-    }
-  }
-  const double span = system.time() - t1;
-  const double q_in = (boundaries.inflow_volume() - inflow1) / span;
-  const double q_gauge = (gauge.net_particles() - gauge1) * l0 * l0 / span;
+  const DischargeCount count = count_discharge(system, boundaries, gauge, 1.5, 4.0, [&] {
+    line_sum += discharge_through_line(system, 0.15, 0.0, 1.0, 2.0 * l0);
+    ++line_samples;
+  });
+  const double q_in = count.inflow / count.seconds;
+  const double q_gauge = count.gauge / count.seconds;
   const double q_line = line_sum / line_samples;
   std::cout << "[discharge control] q=" << q << " inflow " << q_in << " gauge " << q_gauge
             << " line " << q_line << " m^2/s; wall velocity " << boundaries.velocity()

@@ -2,9 +2,12 @@
 #pragma once
 
 #include <algorithm>
+#include <functional>
 #include <vector>
 
+#include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/observers.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
 
 namespace cosim::mps::testing {
@@ -42,6 +45,38 @@ inline int count_kind(const FluidSystem& system, ParticleKind kind) {
 }
 inline int count_kind(const ParticleSet& set, ParticleKind kind) {
   return count_kind(set.kinds, kind);
+}
+
+// What an open channel delivered over [t_start, t_end]: the volume its inflow released and the
+// net volume through a gauge line [m^3, m^2 in 2D], and the time it took [s].
+struct DischargeCount {
+  double inflow = 0.0, gauge = 0.0, seconds = 0.0;
+};
+
+// Steps `system` at its stable step to t_end, updating its open boundaries and the gauge after
+// every step; counts from the first step end at or past t_start, where `sample` (if any) also
+// runs after every step.
+inline DischargeCount count_discharge(FluidSystem& system, OpenBoundaries& boundaries,
+                                      GaugeLine& gauge, double t_start, double t_end,
+                                      const std::function<void()>& sample = {}) {
+  double inflow0 = 0.0, start = 0.0;
+  long gauge0 = 0;
+  bool started = false;
+  while (system.time() < t_end) {
+    system.step(system.stable_dt());
+    boundaries.update();
+    gauge.update(system);
+    if (!started && system.time() >= t_start) {
+      started = true;
+      start = system.time();
+      inflow0 = boundaries.inflow_volume();
+      gauge0 = gauge.net_particles();
+    }
+    if (started && sample) sample();
+  }
+  const double particle = fill_volume_per_particle(system.parameters());
+  return {boundaries.inflow_volume() - inflow0,
+          static_cast<double>(gauge.net_particles() - gauge0) * particle, system.time() - start};
 }
 
 }  // namespace cosim::mps::testing

@@ -14,14 +14,6 @@
 namespace cosim::testing {
 namespace {
 
-std::string scenario(const std::string& name) {
-  return (std::filesystem::path(COSIM_SCENARIOS) / name).string();
-}
-
-const nlohmann::json& metrics_of(const nlohmann::json& summary) {
-  return summary["participants"][0]["report"]["metrics"];
-}
-
 // `cosim validate` of free_overfall_3d with `settings` fails at `key` saying `message`.
 void expect_refused(const std::string& settings, const std::string& key,
                     const std::string& message) {
@@ -94,9 +86,10 @@ TEST(Channels, PeriodicChannelRunsIn3d) {
 TEST(Channels, FreeOverfallAgainstRouseIn2d) {
   const auto runs = fresh_folder("channels-2d-overfall");
   const auto result = run_cosim(
-      fmt::format("run {} --runs-dir {} --quiet --set participants.fluid_mps.particle_spacing=0.005 "
-                  "--set coupling.timeout=30",
-                  scenario("free_overfall"), runs.string()),
+      fmt::format(
+          "run {} --runs-dir {} --quiet --set participants.fluid_mps.particle_spacing=0.005 "
+          "--set coupling.timeout=30",
+          scenario("free_overfall"), runs.string()),
       240);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const auto summary = read_summary(run_folder_of(result));
@@ -126,7 +119,9 @@ TEST(Channels, FreeOverfallRunsIn3d) {
   const auto& metrics = metrics_of(summary);
   ASSERT_TRUE(metrics.contains("brink_depth_ratio")) << metrics.dump(1);
   ASSERT_TRUE(metrics.contains("released_discharge")) << metrics.dump(1);
-  EXPECT_LT(metrics["released_discharge"]["relative_error"].get<double>(), 0.05) << metrics.dump(1);
+  // The wall releases whole columns (about 20 over the 0.4 s window at this l0): one column
+  // more or less is 5 %.
+  EXPECT_LT(metrics["released_discharge"]["relative_error"].get<double>(), 0.1) << metrics.dump(1);
   const double brink = metrics["brink_depth_ratio"]["value"].get<double>();
   EXPECT_GT(brink, 0.4) << metrics.dump(1);
   EXPECT_LT(brink, 1.0) << metrics.dump(1);

@@ -39,6 +39,18 @@ std::filesystem::path fresh_folder(const std::string& name);
 
 std::filesystem::path test_scene(const std::string& name);
 
+#ifdef COSIM_SCENARIOS
+// A bundle of scenarios/ (the test target defines COSIM_SCENARIOS as that folder).
+inline std::string scenario(const std::string& name) {
+  return (std::filesystem::path(COSIM_SCENARIOS) / name).string();
+}
+#endif
+
+// The `report.metrics` of the first participant in a summary.json.
+inline const nlohmann::json& metrics_of(const nlohmann::json& summary) {
+  return summary["participants"][0]["report"]["metrics"];
+}
+
 // The `report.info` of participant `name` in a summary.json; throws (failing the test) if none.
 inline const nlohmann::json& info_of(const nlohmann::json& summary, const std::string& name) {
   for (const auto& p : summary["participants"]) {

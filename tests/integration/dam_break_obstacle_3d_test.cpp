@@ -18,10 +18,6 @@
 namespace cosim::testing {
 namespace {
 
-std::string scenario(const std::string& name) {
-  return (std::filesystem::path(COSIM_SCENARIOS) / name).string();
-}
-
 TEST(DamBreakObstacle3d, ImpactAndGaugesAgainstTheMeasuredRecord) {
   const auto runs = fresh_folder("dam-break-obstacle-3d");
   const auto result = run_cosim(
@@ -186,10 +182,10 @@ participants:
                                        test_scene("box_dam_break_3d").string(), restart,
                                        h5.string(), restart)),
                  "participants\\.fluid_mps\\.restart\\.frame", "has 2 frames");
-  expect_refused(run_cosim(fmt::format("validate {} --set {}.file={}",
-                                       test_scene("box_dam_break_3d").string(), restart,
-                                       (folder / "curves.csv").string())),
-                 "participants\\.fluid_mps\\.restart\\.file", "curves.csv");
+  expect_refused(
+      run_cosim(fmt::format("validate {} --set {}.file={}", test_scene("box_dam_break_3d").string(),
+                            restart, (folder / "curves.csv").string())),
+      "participants\\.fluid_mps\\.restart\\.file", "curves.csv");
 }
 
 }  // namespace

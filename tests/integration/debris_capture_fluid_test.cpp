@@ -31,6 +31,26 @@ const nlohmann::json& participant(const nlohmann::json& summary, const std::stri
 // water particles, 10 000 in all), 100 boulders and 6 logs, 0.8 s after the gate opens. The walls
 // are 0.3 m high: the surge that runs up the end wall (u^2 / 2g ~ 0.3 m) stays in the flume.
 constexpr double kLength = 1.2, kWidth = 0.16, kWallHeight = 0.3, kDam = 0.8;
+// The DEM's section of both CI scenes: the flume, its roughness and dam, 100 boulders and 6 logs
+// behind the gate.
+const std::string kDebris = fmt::format(R"(  debris_dem:
+    substep: 1.0e-5
+    flume: {{length: {0}, width: {1}, wall_height: {2}}}
+    bed_roughness: {{x0: 0.3, x1: {0}, d_min: 0.007, d_max: 0.02, seed: 3}}
+    dam: {{x: {3}, column_diameter: 0.018, horizontal_gap: 0.05, vertical_gap: 0.03,
+           height: 0.14}}
+    front_gauge_x: 0.6
+    packing:
+      box_min: [0.05, 0, 0]
+      box_max: [0.3, {1}, 0.12]
+      spheres:
+        - {{diameter: 0.020, count: 40}}
+        - {{diameter: 0.015, count: 60}}
+      log_count: 6
+      seed: 9
+    gate: {{x: 0.3, settle_time: 0.3}}
+)",
+                                        kLength, kWidth, kWallHeight, kDam);
 const std::string kScene = fmt::format(R"(name: debris_capture_fluid_ci
 duration: 0.8
 output_interval: 0.1
@@ -50,30 +70,15 @@ participants:
     sample_radius: 0.04
     scene:
       kind: flume
-      length: &length {0}
-      width: &width {1}
-      wall_height: &height {2}
+      length: {0}
+      width: {1}
+      wall_height: {2}
       dummy_layers: 1
       water: {{x_max: 0.3, depth: 0.08}}
       outlet_x: 1.15
-  debris_dem:
-    substep: 1.0e-5
-    flume: {{length: *length, width: *width, wall_height: *height}}
-    bed_roughness: {{x0: 0.3, x1: {0}, d_min: 0.007, d_max: 0.02, seed: 3}}
-    dam: {{x: {3}, column_diameter: 0.018, horizontal_gap: 0.05, vertical_gap: 0.03,
-           height: 0.14}}
-    front_gauge_x: 0.6
-    packing:
-      box_min: [0.05, 0, 0]
-      box_max: [0.3, {1}, 0.12]
-      spheres:
-        - {{diameter: 0.020, count: 40}}
-        - {{diameter: 0.015, count: 60}}
-      log_count: 6
-      seed: 9
-    gate: {{x: 0.3, settle_time: 0.3}}
 )",
-                                       kLength, kWidth, kWallHeight, kDam);
+                                       kLength, kWidth, kWallHeight) +
+                           kDebris;
 
 TEST(DebrisCaptureFluid, ASurgeCarriesTheDebrisToTheDamWithNothingLost) {
   const auto folder = fresh_folder("debris-capture-fluid");
@@ -175,6 +180,88 @@ TEST(DebrisCaptureFluid, ASurgeCarriesTheDebrisToTheDamWithNothingLost) {
   EXPECT_LT(fluid["momentum_budget_residual"].get<double>(), 1e-12);
 }
 
+// The same reach fed by a sustained inflow instead of a reservoir: the 3D open_channel (its bed
+// and side walls where the DEM's flume triangles are) with seed 001's soluble moving wall across
+// the width upstream of the DEM's upstream wall, q = 0.03 m^2/s per width for the whole run (a
+// deeper flow than seed 004's 4.3 l/s over 0.3 m, so that l0 = 2 cm resolves it), and a free
+// overfall at the flume's end, where the DEM's debris leaves too.
+const std::string kInflowScene = fmt::format(R"(name: debris_capture_inflow_ci
+duration: 1.0
+output_interval: 0.1
+world:
+  slope_degrees: 15
+coupling:
+  scheme: serial-explicit
+  window: 2.0e-3
+  adaptive_window: true
+participants:
+  fluid_mps:
+    dimension: 3
+    particle_spacing: 0.02
+    kinematic_viscosity: 1.0e-6
+    radius_laplacian_over_l0: 3.1
+    max_dt: 2.0e-3
+    sample_radius: 0.04
+    scene:
+      kind: open_channel
+      length: {0}
+      tank_width: {1}
+      tank_height: 0.12
+      dummy_layers: 1
+      initial_depth: 0.0
+      block_height: 0.1
+      pool_particles: 6000
+      inflow: {{control: discharge, discharge: 0.03, ramp_time: 0.1}}
+)",
+                                             kLength, kWidth) +
+                                 kDebris;
+
+TEST(DebrisCaptureFluid, ASustainedInflowCarriesTheDebrisToTheDam) {
+  const auto folder = fresh_folder("debris-capture-inflow");
+  std::ofstream(folder / "scenario.yaml") << kInflowScene;
+  const auto result =
+      run_cosim(fmt::format("run {} --runs-dir {} --quiet", folder.string(), folder.string()), 150);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const auto run = run_folder_of(result);
+  const auto summary = read_summary(run);
+  const auto& debris = participant(summary, "debris_dem")["report"];
+  const auto& fluid = participant(summary, "fluid_mps")["report"]["info"];
+  // The inflow ran the whole time: q times the width over the run, less the soft start's half
+  // (0.1 s), within the last column's volume; the water reached the overfall and left.
+  const double expected = 0.03 * kWidth * (1.0 - 0.05);
+  EXPECT_NEAR(fluid["inflow_volume"].get<double>(), expected, 0.05 * expected) << fluid.dump(1);
+  EXPECT_GT(fluid["recycled_particles"].get<int>(), 100) << fluid.dump(1);
+  // Every fluid particle between the fluid's walls, or past the overfall on its way out.
+  const auto last = output::read_point_frame(run / "fluid_mps" / "particles.h5", -1);
+  const double tolerance = 0.5 * 0.02;
+  const auto& kinds = last.labels.at("kind");
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    if (kinds[i] != 0) continue;
+    const Eigen::Vector3d& x = last.positions[i];
+    if (x.x() > kLength) continue;
+    ASSERT_TRUE(x.x() > -tolerance && x.y() > -tolerance && x.y() < kWidth + tolerance &&
+                x.z() > -tolerance)
+        << "fluid particle " << i << " at " << x.transpose();
+  }
+  // No element lost; the flow carried the debris past the gauge to the dam.
+  const auto elements = output::read_point_frame(run / "debris_dem" / "debris.h5", -1);
+  EXPECT_EQ(elements.positions.size(), 106u);
+  const auto& metrics = debris["metrics"];
+  ASSERT_FALSE(metrics["debris_front_time"]["value"].is_null()) << metrics.dump();
+  EXPECT_GT(metrics["debris_arrived_at_dam"]["value"].get<double>(), 0.0);
+  const double p_v = metrics["capture_rate_P_V"]["value"].get<double>();
+  EXPECT_GE(p_v, 0.0);
+  EXPECT_LE(p_v, 1.0);
+  // The fluid took back, one window later, everything the debris took from it.
+  const Eigen::Vector3d took = vector_of(debris["info"]["interaction_impulse"]);
+  const Eigen::Vector3d last_window = vector_of(debris["info"]["last_window_interaction_impulse"]);
+  EXPECT_GT(took.x(), 1e-4) << took.transpose();
+  const auto [booked, received, undelivered, out_of_plane] = flow_impulses(fluid);
+  EXPECT_LT((booked + (took - last_window)).norm(), 1e-9 * took.norm())
+      << booked.transpose() << " vs " << (took - last_window).transpose();
+  EXPECT_LT((received + undelivered - booked).norm(), 1e-9 * booked.norm());
+}
+
 // `cosim validate` refuses what the fluid process would refuse with file, line and key: the
 // 3D-only flume in a 2D fluid (no 2D builder), and a flume that is not whole lattice cells long
 // (its end wall would not stand where the DEM's does).
@@ -184,7 +271,7 @@ TEST(DebrisCaptureFluid, ValidateRefusesAFlumeTheFluidCannotBuild) {
   };
   for (const Case& c :
        {Case{"    dimension: 3\n", "    dimension: 2\n", "kind", "'flume' is a 3D scene"},
-        Case{"length: &length 1.2", "length: &length 1.21", "length",
+        Case{"length: 1.2\n", "length: 1.21\n", "length",
              "is not a whole number of particle_spacing"}}) {
     const auto folder = fresh_folder("debris-capture-fluid-refused");
     std::string yaml = kScene;

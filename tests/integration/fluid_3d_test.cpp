@@ -18,14 +18,6 @@
 namespace cosim::testing {
 namespace {
 
-std::string scenario(const std::string& name) {
-  return (std::filesystem::path(COSIM_SCENARIOS) / name).string();
-}
-
-const nlohmann::json& metrics_of(const nlohmann::json& summary) {
-  return summary["participants"][0]["report"]["metrics"];
-}
-
 TEST(Fluid3d, DamBreakAgainstMartinMoyceWithThreeDimensionalOutput) {
   const auto runs = fresh_folder("fluid-3d-dam-break");
   const auto result = run_cosim(
