@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "boundary_keys.hpp"
 #include "cosim/fluid_mps/pool_state.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/scenario/parameter_reader.hpp"

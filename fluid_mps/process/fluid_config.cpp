@@ -7,6 +7,7 @@
 #include <map>
 #include <utility>
 
+#include "boundary_keys.hpp"
 #include "chain_state.hpp"
 #include "cosim/output/point_series.hpp"
 #include "cosim/scenario/parameter_reader.hpp"

@@ -160,11 +160,10 @@ TEST(ValidateAgrees, FluidAndDebrisBeyondTheMachinesMemoryAreRefusedByValidate) 
                  "key 'participants.debris_dem.packing.spheres[", "debris_dem needs about");
 }
 
-// The fluid's nested keys are read from their declarations (fluid_mps/process/scene_keys.hpp and
-// reference_keys.hpp):
-// a key of another scene kind, inflow control, dimension or reference kind is refused as "only
-// used with ..." (it used to be an "unknown key", or not refused at all), and every refusal names
-// the file, the line and the dotted key.
+// The fluid's nested keys are read from their declarations (fluid_mps/process/scene_keys.hpp,
+// boundary_keys.hpp and reference_keys.hpp): a key of another scene kind, inflow control,
+// dimension or reference kind is refused as "only used with ..." (it used to be an "unknown
+// key", or not refused at all), and every refusal names the file, the line and the dotted key.
 TEST(ValidateAgrees, FluidNestedKeysAreRefusedAtTheirKeyWithFileAndLine) {
   const std::string key = "scenario.yaml:14: key 'participants.fluid_mps.";
   expect_refused(std::string(kFluid) + "      column_x: 0.1\n", key + "scene.column_x'",

@@ -4,6 +4,7 @@
 #include <map>
 #include <utility>
 
+#include "boundary_keys.hpp"
 #include "cosim/debris_dem/dem_world.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
 #include "cosim/prescribed_flow/profiles.hpp"
@@ -101,6 +102,7 @@ std::vector<Group> debris_groups() {
 
 std::vector<Group> fluid_groups() {
   const char* scene_keys = "fluid_mps/process/scene_keys.hpp";
+  const char* boundary_keys = "fluid_mps/process/boundary_keys.hpp";
   const char* reference_keys = "fluid_mps/process/reference_keys.hpp";
   mps::FluidConfig config_defaults;
   mps::SceneSettings scene_defaults;
@@ -121,22 +123,22 @@ std::vector<Group> fluid_groups() {
   groups.push_back(group<mps::OpenBoundarySettings>(
       fmt::format("The inflow, a soluble moving wall (kind: {}; required there)",
                   mps::scene_kinds_where(mps::has_inflow)),
-      scene_keys, "scene.inflow."));
+      boundary_keys, "scene.inflow."));
   groups.push_back(group<mps::ChainStateSettings>(
       "The start of a periodic_pool from one pool of a pool_fishway run's frame (kind: "
       "periodic_pool; absent or null: the pool starts level)",
-      scene_keys, "scene.chain_state."));
+      boundary_keys, "scene.chain_state."));
   Group solids = group<mps::ObstacleKeys>(
       "Solids in a 3D tank (dimension: 3): `scene.obstacles` boxes and `scene.solids` STL "
       "surfaces, one per entry",
-      scene_keys, "scene.obstacles[].");
+      boundary_keys, "scene.obstacles[].");
   add_rows<mps::StlSolidKeys>(solids, "scene.solids[].");
   groups.push_back(std::move(solids));
   groups.push_back(group<mps::RestartSettings>(
-      "A restart from an output frame (the scene still describes the tank)", scene_keys,
+      "A restart from an output frame (the scene still describes the tank)", boundary_keys,
       "restart."));
   groups.push_back(group<mps::PartitionSegment>("Thin partitions, one per `partitions` entry",
-                                                scene_keys, "partitions[]."));
+                                                boundary_keys, "partitions[]."));
   groups.push_back(group("Observation points", reference_keys, "observe.",
                          mps::ObserveKeys{observation_defaults, {}}));
   groups.push_back(
