@@ -237,6 +237,7 @@ class FluidProcess final : public coupler::Solver {
     out.value("fluid_process.initial_momentum", initial_momentum_);
     out.value("fluid_process.budget_sources", budget_sources_);
     out.value("fluid_process.budget_scale", budget_scale_);
+    if (open_boundaries_) out.value("fluid_process.open_boundaries", open_boundaries_->state());
     if (!blade_.empty()) {
       out.vector("fluid_process.blade_particles", blade_);
       out.value("fluid_process.blade_impulse", blade_impulse_);
@@ -254,8 +255,10 @@ class FluidProcess final : public coupler::Solver {
     }
     system_ = std::make_unique<mps::FluidSystem>(config_.parameters, state);
     if (open_boundaries_) {
-      // Its inflow control is re-derived from the restored particles.
+      // The block and the pool come from the restored particles, the control's state and the
+      // totals from the checkpoint.
       open_boundaries_ = std::make_unique<mps::OpenBoundaries>(*system_, config_.scene.inflow);
+      open_boundaries_->restore(in.value<mps::OpenBoundaryState>("fluid_process.open_boundaries"));
     }
     link_.load_checkpoint(in);
     steps_ = in.value<int64_t>("fluid_process.steps");

@@ -140,6 +140,20 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
   set_block_velocity();
 }
 
+OpenBoundaryState OpenBoundaries::state() const {
+  return {velocity_, level_, last_dissolution_time_, dissolved_total_, recycled_total_, rows_};
+}
+
+void OpenBoundaries::restore(const OpenBoundaryState& state) {
+  velocity_ = state.velocity;
+  level_ = state.level;
+  last_dissolution_time_ = state.last_dissolution_time;
+  dissolved_total_ = state.dissolved_total;
+  recycled_total_ = state.recycled_total;
+  rows_ = static_cast<int>(state.rows);
+  set_block_velocity();
+}
+
 double OpenBoundaries::wall_speed() const {
   const double ramp = settings_.ramp_time;
   if (!(ramp > 0.0)) return velocity_;

@@ -139,6 +139,32 @@ TEST(CoupledRestart, FluidAndDebrisContinueBitForBit) {
                      pair.restarted / "debris_dem" / "debris.h5", 0.04);
 }
 
+// An open channel fed by the soluble moving wall (discharge control, free outflow), in 2D and 3D:
+// the wall's speed, rows and level, its released and recycled totals and its pool carry over,
+// so the restarted run releases the same columns at the same times.
+TEST(CoupledRestart, OpenChannelInflowContinuesBitForBit) {
+  for (const auto& [dimension, spacing] : {std::pair{2, 0.005}, std::pair{3, 0.01}}) {
+    const auto pair = straight_and_restarted(
+        std::string(COSIM_SCENARIOS) + (dimension == 2 ? "/free_overfall" : "/free_overfall_3d"),
+        fmt::format("open-channel-{}d", dimension),
+        fmt::format("--set duration=0.5 --set output_interval=0.05 "
+                    "--set participants.fluid_mps.particle_spacing={} "
+                    "--set participants.fluid_mps.reference.average_from=0.3",
+                    spacing),
+        0.25, 0.25, 300);
+    ASSERT_FALSE(pair.restarted.empty());
+    expect_continued(pair, 0.25);
+    expect_same_frames(pair.straight / "fluid_mps" / "particles.h5",
+                       pair.restarted / "fluid_mps" / "particles.h5", 0.25);
+    for (const char* key : {"inflow_volume", "recycled_particles", "final_inflow_velocity",
+                            "final_measured_level"}) {
+      EXPECT_EQ(info_of(pair.restarted_summary, "fluid_mps")[key],
+                info_of(pair.straight_summary, "fluid_mps")[key])
+          << dimension << "D: " << key;
+    }
+  }
+}
+
 int count_runs(const std::filesystem::path& runs) {
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(runs)) count += entry.is_directory();

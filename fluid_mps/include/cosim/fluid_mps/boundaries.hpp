@@ -98,9 +98,20 @@ struct BoundaryUpdate {
   int created = 0;    // wall particles taken from the pool for new block columns
 };
 
+// The running state of an OpenBoundaries that its particles do not hold (the block and the pool
+// are re-derived from their kinds): what a checkpoint carries so that a restarted run releases
+// the same columns at the same times as the uninterrupted one. Plain values, written as bytes.
+struct OpenBoundaryState {
+  double velocity = 0.0;               // [m/s] the control's wall speed
+  double level = 0.0;                  // [m] the last measured level
+  double last_dissolution_time = 0.0;  // [s]
+  long dissolved_total = 0, recycled_total = 0;
+  long rows = 0;  // released per column (long: no padding bytes in the record)
+};
+
 // Call update() after every FluidSystem::step. The particle count never changes; the pool is the
 // set of inactive particles (lowest index first, so runs are deterministic and restartable: a
-// restarted system gives the same block and pool).
+// restarted system gives the same block and pool; restore() brings back the rest).
 class OpenBoundaries {
  public:
   OpenBoundaries(FluidSystem& system, OpenBoundarySettings settings);
@@ -119,6 +130,10 @@ class OpenBoundaries {
   int pool_size() const;
   const std::vector<int>& block() const { return block_; }
   const OpenBoundarySettings& settings() const { return settings_; }
+
+  OpenBoundaryState state() const;
+  // Takes over a state saved by state() (of the same scene), and moves the block at its speed.
+  void restore(const OpenBoundaryState& state);
 
  private:
   int take_from_pool();
