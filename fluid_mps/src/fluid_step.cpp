@@ -42,7 +42,7 @@ void visit_partners(const NeighbourList& list, const std::vector<Eigen::Vector3d
 struct FluidSystem::StepConstants {
   double dt;
   int n, d;
-  double re_n, re_g, re_l, collision_distance;
+  double re_n, re_g, re_l, collision_distance, wall_collision_distance;
   double n0_n, n0_g, n0_l, lambda;
   Eigen::Vector3d driving;  // periodic channel: constant pressure drop as a body force
 };
@@ -61,6 +61,7 @@ StepReport FluidSystem::step(double dt) {
   c.re_g = p.radius_gradient_over_l0 * l0;
   c.re_l = p.radius_laplacian_over_l0 * l0;
   c.collision_distance = p.collision_distance_ratio * l0;
+  c.wall_collision_distance = p.wall_collision_factor * c.collision_distance;
   c.n0_n = density_sums_.n0;
   c.n0_g = gradient_sums_.n0;
   c.n0_l = laplacian_sums_.n0;
@@ -158,12 +159,13 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
 // wall, half between two fluid particles), so fluid-fluid collisions conserve momentum.
 // All corrections use the pre-collision velocities: order independent, thus deterministic.
 void FluidSystem::collide(const StepConstants& c, StepReport& report) {
-  if (!(c.collision_distance > 0.0)) return;
+  const double reach = std::max(c.collision_distance, c.wall_collision_distance);
+  if (!(reach > 0.0)) return;
   const MpsParameters& p = parameters_;
   const int n = c.n;
   update_neighbours(position_star_, report);
   const bool masked = !p.partitions.empty();
-  if (masked) find_near_pairs(position_star_, c.collision_distance);
+  if (masked) find_near_pairs(position_star_, reach);
   fill(correction_, n, kZero);
   fill(wall_correction_, n, kZero);
   fill(collided_, n, 0);
@@ -171,7 +173,8 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kind_[i])) continue;
     auto pair = [&](int j, double r) {
-      if (r >= c.collision_distance || r <= 0.0) return;
+      const double limit = is_fluid(kind_[j]) ? c.collision_distance : c.wall_collision_distance;
+      if (r >= limit || r <= 0.0) return;
       const Eigen::Vector3d normal = p.periodic.wrap(position_star_[j] - position_star_[i]) / r;
       const double approach = (velocity_star_[j] - velocity_star_[i]).dot(normal);
       if (approach >= 0.0) return;
@@ -186,7 +189,7 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
         pair(near_.index[k], near_.distance[k]);
       }
     } else {
-      visit_partners(neighbours_, position_star_, p.periodic, i, c.collision_distance, pair);
+      visit_partners(neighbours_, position_star_, p.periodic, i, reach, pair);
     }
   }
   for (int id = 0; id < n; ++id) {

@@ -94,6 +94,10 @@ struct MpsParameters {
   // Seed 001 settles on d_cr = 1.0, C_c = -0.8 for the fishway; 0.5 / 0.2 is its milder run PF-1.
   double collision_distance_ratio = 0.5;
   double collision_restitution = 0.2;
+  // Fluid-wall pairs collide within wall_collision_factor d_c (1: as fluid pairs). With d_cr = 1.0,
+  // the wall lattice's own spacing, the rows next to a wall rest on its particles' tops in
+  // permanent collision and ride over them like a rough bed (docs/validation.md, free_overfall).
+  double wall_collision_factor = 1.0;
   double courant = 0.2;
   double diffusion_number = 0.2;  // viscous limit dt <= diffusion_number l0^2 / nu
   double max_dt = 1e-3;           // user upper bound [s]
@@ -244,6 +248,10 @@ void visit_parameters(P& p, V& v) {
     p.collision_distance_ratio);
   v(Key("collision_restitution").in(Range::between(-1.0, 1.0)).doc("C_c of the collision model"),
     p.collision_restitution);
+  v(Key("wall_collision_factor")
+        .in(Range::between(0.0, 1.5))
+        .doc("fluid-wall pairs collide within this times d_c (1: as fluid pairs)"),
+    p.wall_collision_factor);
   v(Key("courant").in(Range{0.0, 1.0, true}).doc("Courant number of the step limit"), p.courant);
   v(Key("diffusion_number").in(Range{0.0, 0.5, true}).doc("viscous limit dt <= D l0^2 / nu"),
     p.diffusion_number);
@@ -305,7 +313,8 @@ double fill_volume_per_particle(const MpsParameters& p);
 // The largest reach of any operator [m]: influence radii and the collision distance.
 inline double largest_influence_radius(const MpsParameters& p) {
   return std::max({p.radius_density_over_l0, p.radius_gradient_over_l0, p.radius_laplacian_over_l0,
-                   p.collision_distance_ratio}) *
+                   p.collision_distance_ratio,
+                   p.collision_distance_ratio * p.wall_collision_factor}) *
          p.particle_spacing;
 }
 
