@@ -185,8 +185,8 @@ int OpenBoundaries::pool_size() const {
 }
 
 double OpenBoundaries::particle_volume() const {
-  const auto& p = system_.parameters();
-  return std::pow(p.particle_spacing, p.dimension);
+  const double l0 = system_.parameters().particle_spacing;
+  return up_ == 2 ? l0 * l0 * l0 : l0 * l0;  // products, as the 2D code always formed them
 }
 
 double OpenBoundaries::inflow_volume() const {
