@@ -5,13 +5,17 @@
 // Built against two commits and run with OMP_NUM_THREADS=1 and 2, equal lines mean equal bits.
 // Also printed, to compare runs that do not keep the bits (argument --single-product: the float
 // CG product): the surge front (largest fluid x), the water height at the back wall (largest
-// fluid height within 2 l0 of the smallest fluid x) and the mean fluid pressure.
+// fluid height within 2 l0 of the smallest fluid x) and the mean fluid pressure. The 2D open
+// channel (the soluble moving wall under discharge and level control) hashes its boundaries'
+// released volume and measured level as well.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 
+#include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
 
@@ -28,11 +32,16 @@ struct Fnv1a {
   void add(double v) { add(&v, sizeof v); }
 };
 
-void report(const char* name, FluidSystem& system, int steps) {
+// `after_step` (if any) runs after every step: the open boundaries' update.
+void report(const char* name, FluidSystem& system, int steps,
+            const std::function<void(Fnv1a&)>& after_step = {}) {
   const int up = system.parameters().dimension == 3 ? 2 : 1;
   long iterations = 0;
-  for (int s = 0; s < steps; ++s) iterations += system.step(system.stable_dt()).pcg_iterations;
   Fnv1a state, density;
+  for (int s = 0; s < steps; ++s) {
+    iterations += system.step(system.stable_dt()).pcg_iterations;
+    if (after_step) after_step(state);
+  }
   double front = -1e300, back = 1e300, height = -1e300, pressure = 0.0;
   int fluid = 0;
   const double l0 = system.parameters().particle_spacing;
@@ -103,6 +112,27 @@ int main(int argc, char** argv) {
     p.pressure_preconditioner = Pre::jacobi;
     FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
     report("3D column a/l0=8 Jacobi", system, 60);
+  }
+  using Control = OpenBoundarySettings::Control;
+  for (const Control control : {Control::discharge, Control::level}) {
+    MpsParameters p;
+    p.particle_spacing = 0.005;
+    p.collision_distance_ratio = 1.0;
+    OpenBoundarySettings settings;
+    FluidSystem system(p, open_channel(p, settings, 0.3, 0.025, 0.06, 4, 400));
+    settings.control = control;
+    settings.discharge = 0.01;
+    settings.target_level = 0.03;
+    settings.velocity = 0.2;
+    settings.level_gain = 50.0;
+    OpenBoundaries boundaries(system, settings);
+    report(control == Control::discharge ? "2D open channel discharge" : "2D open channel level",
+           system, 400, [&](Fnv1a& hash) {
+             boundaries.update();
+             hash.add(boundaries.inflow_volume());
+             hash.add(boundaries.measured_level());
+             hash.add(boundaries.velocity());
+           });
   }
   return 0;
 }

@@ -184,13 +184,14 @@ int OpenBoundaries::pool_size() const {
       std::count(system_.kinds().begin(), system_.kinds().end(), ParticleKind::inactive));
 }
 
-double OpenBoundaries::particle_volume() const {
+double OpenBoundaries::volume_of(double particles) const {
+  // Left to right, as the 2D code always formed it (the same bits in 2D).
   const double l0 = system_.parameters().particle_spacing;
-  return up_ == 2 ? l0 * l0 * l0 : l0 * l0;  // products, as the 2D code always formed them
+  return up_ == 2 ? particles * l0 * l0 * l0 : particles * l0 * l0;
 }
 
 double OpenBoundaries::inflow_volume() const {
-  return static_cast<double>(dissolved_total_) * particle_volume();
+  return volume_of(static_cast<double>(dissolved_total_));
 }
 
 int remove_fluid_beyond(FluidSystem& system, double outlet_x) {
@@ -243,8 +244,8 @@ BoundaryUpdate OpenBoundaries::update() {
     ++inside;
   }
   // Mean depth: the water's volume in the window over its bed area (area over length in 2D).
-  const double bed_area = s.level_window * (up_ == 2 ? s.width : 1.0);
-  const double mean_depth = inside * particle_volume() / bed_area;
+  const double bed_area = up_ == 2 ? s.level_window * s.width : s.level_window;
+  const double mean_depth = volume_of(inside) / bed_area;
   if (s.level_measure == OpenBoundarySettings::LevelMeasure::highest) {
     level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_height : 0.0;
   } else {

@@ -139,8 +139,8 @@ class OpenBoundaries {
   int take_from_pool();
   void set_block_velocity();
   double height(const Eigen::Vector3d& x) const { return x[up_]; }
-  // Fluid volume per particle [m^3, m^2 in 2D]: the lattice cell, l0^dimension.
-  double particle_volume() const;
+  // The fluid volume of `particles` lattice cells, l0^dimension each [m^3, m^2 in 2D].
+  double volume_of(double particles) const;
   // Adds one new block column at x (every row, and in 3D every position across the width).
   void add_column(double x, BoundaryUpdate& result);
 
