@@ -51,8 +51,11 @@ const std::string kDebris = fmt::format(R"(  debris_dem:
     gate: {{x: 0.3, settle_time: 0.3}}
 )",
                                         kLength, kWidth, kWallHeight, kDam);
-const std::string kScene = fmt::format(R"(name: debris_capture_fluid_ci
-duration: 0.8
+// The top of both CI scenes: the run, the 15 degree world, the coupling and the 3D fluid's own
+// keys at l0 = 2 cm (its scene follows).
+std::string scene_head(const std::string& name, double duration) {
+  return fmt::format(R"(name: {}
+duration: {}
 output_interval: 0.1
 world:
   slope_degrees: 15
@@ -68,7 +71,12 @@ participants:
     radius_laplacian_over_l0: 3.1
     max_dt: 2.0e-3        # at l0 = 2 cm the Courant limit (0.2 l0 / u) allows it below 2 m/s
     sample_radius: 0.04
-    scene:
+)",
+                     name, duration);
+}
+
+const std::string kScene = scene_head("debris_capture_fluid_ci", 0.8) +
+                           fmt::format(R"(    scene:
       kind: flume
       length: {0}
       width: {1}
@@ -185,24 +193,8 @@ TEST(DebrisCaptureFluid, ASurgeCarriesTheDebrisToTheDamWithNothingLost) {
 // the width upstream of the DEM's upstream wall, q = 0.03 m^2/s per width for the whole run (a
 // deeper flow than seed 004's 4.3 l/s over 0.3 m, so that l0 = 2 cm resolves it), and a free
 // overfall at the flume's end, where the DEM's debris leaves too.
-const std::string kInflowScene = fmt::format(R"(name: debris_capture_inflow_ci
-duration: 1.0
-output_interval: 0.1
-world:
-  slope_degrees: 15
-coupling:
-  scheme: serial-explicit
-  window: 2.0e-3
-  adaptive_window: true
-participants:
-  fluid_mps:
-    dimension: 3
-    particle_spacing: 0.02
-    kinematic_viscosity: 1.0e-6
-    radius_laplacian_over_l0: 3.1
-    max_dt: 2.0e-3
-    sample_radius: 0.04
-    scene:
+const std::string kInflowScene = scene_head("debris_capture_inflow_ci", 1.0) +
+                                 fmt::format(R"(    scene:
       kind: open_channel
       length: {0}
       tank_width: {1}
