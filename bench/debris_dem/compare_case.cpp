@@ -7,6 +7,10 @@
 //   debris_dem_compare --write-start FILE [--spheres N]
 //   debris_dem_compare --start FILE [--settle-steps 15000] [--timed-steps 4000]
 //                      [--report-steps 1000]
+//
+// Under `valgrind --tool=callgrind --instr-atstart=no` only the timed steps are instrumented
+// (the settling steps run at the uninstrumented speed), so the instruction count per timed step
+// is a load-independent measure of the step's cost.
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -16,6 +20,15 @@
 #include <vector>
 
 #include "settling_scene.hpp"
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define COSIM_CALLGRIND_START() CALLGRIND_START_INSTRUMENTATION
+#define COSIM_CALLGRIND_STOP() CALLGRIND_STOP_INSTRUMENTATION
+#else
+#define COSIM_CALLGRIND_START()
+#define COSIM_CALLGRIND_STOP()
+#endif
 
 namespace {
 
@@ -102,7 +115,9 @@ int run(const std::string& path, long long settle_steps, long long timed_steps,
   const long long rebuilds_before = world->list_rebuilds();
   const double cpu_before = process_cpu_seconds();
   const auto wall_before = std::chrono::steady_clock::now();
+  COSIM_CALLGRIND_START();
   steps(timed_steps);
+  COSIM_CALLGRIND_STOP();
   const double cpu = process_cpu_seconds() - cpu_before;
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_before).count();
