@@ -2,7 +2,8 @@
 // LIGGGHTS 3.8 (compare_liggghts.py): writes the start positions, or reads them, drops the
 // spheres for settle_steps and times timed_steps on one thread. Prints, every report_steps, the
 // time, translational and total kinetic energy and the touching contacts (the physics check),
-// then one line with the CPU time, wall time and list rebuilds of the timed steps.
+// then one line with the CPU time, wall time and list rebuilds of the timed steps, and a hash of
+// the final state.
 //
 //   debris_dem_compare --write-start FILE [--spheres N]
 //   debris_dem_compare --start FILE [--settle-steps 15000] [--timed-steps 4000]
@@ -12,6 +13,7 @@
 // (the settling steps run at the uninstrumented speed), so the instruction count per timed step
 // is a load-independent measure of the step's cost.
 #include <chrono>
+#include <cstddef>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -53,6 +55,29 @@ int wall_contacts(const DemWorld& world) {
              (kBoxSide - p.y() <= r);
   }
   return count;
+}
+
+// FNV-1a over the bits of every moving element's position, velocity, angular velocity and
+// attitude: equal hashes of two builds mean bitwise equal states, not just equal printed digits.
+unsigned long long state_hash(const DemWorld& world) {
+  unsigned long long hash = 14695981039346656037ULL;
+  const auto add = [&](const double* values, std::size_t count) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(values);
+    for (std::size_t k = 0; k < count * sizeof(double); ++k) {
+      hash = (hash ^ bytes[k]) * 1099511628211ULL;
+    }
+  };
+  for (const int i : world.moving_elements()) {
+    const Eigen::Vector3d p = world.position(i);
+    const Eigen::Vector3d v = world.velocity(i);
+    const Eigen::Vector3d w = world.angular_velocity(i);
+    const Eigen::Quaterniond q = world.orientation(i);
+    add(p.data(), 3);
+    add(v.data(), 3);
+    add(w.data(), 3);
+    add(q.coeffs().data(), 4);
+  }
+  return hash;
 }
 
 void report(const DemWorld& world) {
@@ -124,6 +149,7 @@ int run(const std::string& path, long long settle_steps, long long timed_steps,
   std::printf("timed spheres=%zu steps=%lld cpu_s=%.4f wall_s=%.4f rebuilds=%lld contacts=%d\n",
               start.size(), timed_steps, cpu, wall, world->list_rebuilds() - rebuilds_before,
               world->contact_count());
+  std::printf("hash state=%016llx\n", state_hash(*world));
   return 0;
 }
 
