@@ -2,12 +2,18 @@
 // LIGGGHTS 3.8 (compare_liggghts.py): writes the start positions, or reads them, drops the
 // spheres for settle_steps and times timed_steps on one thread. Prints, every report_steps, the
 // time, translational and total kinetic energy and the touching contacts (the physics check),
-// then one line with the CPU time, wall time and list rebuilds of the timed steps.
+// then one line with the CPU time, wall time and list rebuilds of the timed steps, and a hash of
+// the final state.
 //
 //   debris_dem_compare --write-start FILE [--spheres N]
 //   debris_dem_compare --start FILE [--settle-steps 15000] [--timed-steps 4000]
 //                      [--report-steps 1000]
+//
+// Under `valgrind --tool=callgrind --instr-atstart=no` only the timed steps are instrumented
+// (the settling steps run at the uninstrumented speed), so the instruction count per timed step
+// is a load-independent measure of the step's cost.
 #include <chrono>
+#include <cstddef>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -16,6 +22,15 @@
 #include <vector>
 
 #include "settling_scene.hpp"
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define COSIM_CALLGRIND_START() CALLGRIND_START_INSTRUMENTATION
+#define COSIM_CALLGRIND_STOP() CALLGRIND_STOP_INSTRUMENTATION
+#else
+#define COSIM_CALLGRIND_START()
+#define COSIM_CALLGRIND_STOP()
+#endif
 
 namespace {
 
@@ -40,6 +55,29 @@ int wall_contacts(const DemWorld& world) {
              (kBoxSide - p.y() <= r);
   }
   return count;
+}
+
+// FNV-1a over the bits of every moving element's position, velocity, angular velocity and
+// attitude: equal hashes of two builds mean bitwise equal states, not just equal printed digits.
+unsigned long long state_hash(const DemWorld& world) {
+  unsigned long long hash = 14695981039346656037ULL;
+  const auto add = [&](const double* values, std::size_t count) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(values);
+    for (std::size_t k = 0; k < count * sizeof(double); ++k) {
+      hash = (hash ^ bytes[k]) * 1099511628211ULL;
+    }
+  };
+  for (const int i : world.moving_elements()) {
+    const Eigen::Vector3d p = world.position(i);
+    const Eigen::Vector3d v = world.velocity(i);
+    const Eigen::Vector3d w = world.angular_velocity(i);
+    const Eigen::Quaterniond q = world.orientation(i);
+    add(p.data(), 3);
+    add(v.data(), 3);
+    add(w.data(), 3);
+    add(q.coeffs().data(), 4);
+  }
+  return hash;
 }
 
 void report(const DemWorld& world) {
@@ -102,13 +140,16 @@ int run(const std::string& path, long long settle_steps, long long timed_steps,
   const long long rebuilds_before = world->list_rebuilds();
   const double cpu_before = process_cpu_seconds();
   const auto wall_before = std::chrono::steady_clock::now();
+  COSIM_CALLGRIND_START();
   steps(timed_steps);
+  COSIM_CALLGRIND_STOP();
   const double cpu = process_cpu_seconds() - cpu_before;
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_before).count();
   std::printf("timed spheres=%zu steps=%lld cpu_s=%.4f wall_s=%.4f rebuilds=%lld contacts=%d\n",
               start.size(), timed_steps, cpu, wall, world->list_rebuilds() - rebuilds_before,
               world->contact_count());
+  std::printf("hash state=%016llx\n", state_hash(*world));
   return 0;
 }
 

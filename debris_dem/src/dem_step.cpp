@@ -67,6 +67,23 @@ void release(DemWorld::PairState& s) {
   s.overlap_ratio = 0.0;
 }
 
+// A candidate found apart: its spring is released once, when it separates.
+void separate(DemWorld::PairSlot& slot, DemWorld::PairState& state) {
+  if (!slot.touching) return;
+  release(state);
+  slot.touching = false;
+}
+
+// displacement(a, b) on the compact copies of a and b (same operations, same result). Forced
+// inline: it is the body of the candidate loop, which GCC 12 otherwise calls it from.
+[[gnu::always_inline]] inline Eigen::Vector3d displacement_between(const DemWorld::HotPosition& pa,
+                                                                   const DemWorld::HotPosition& pb,
+                                                                   double region_size) {
+  const Eigen::Vector3i dc = pa.cell - pb.cell;
+  if (dc.isZero()) return pa.local - pb.local;
+  return dc.cast<double>() * region_size + (pa.local - pb.local);
+}
+
 bool pair_order(const DemWorld::PairSlot& l, const ContactPair& r) {
   return l.a != r.a ? l.a < r.a : l.b < r.b;
 }
@@ -140,9 +157,7 @@ void DemWorld::update_list_if_needed(double dt) {
   ++list_rebuilds_;
 }
 
-void DemWorld::compute_forces(double dt) {
-  const bool clip = parameters_.clip_normal_force;
-  const int threads = std::max(1, parameters_.threads);
+void DemWorld::reset_forces() {
   const int n = element_count();
   if (static_cast<int>(gravity_force_.size()) != n || gravity_force_for_ != parameters_.gravity) {
     gravity_force_.resize(n);
@@ -165,173 +180,201 @@ void DemWorld::compute_forces(double dt) {
     }
     hot_valid_ = true;
   }
-  // displacement(a, b) on the compact copy (same operations, same result).
-  const double region_size = parameters_.region_size;
-  const auto hot_displacement = [&](int a, int b) -> Eigen::Vector3d {
-    const HotPosition& pa = hot_position_[a];
-    const HotPosition& pb = hot_position_[b];
-    const Eigen::Vector3i dc = pa.cell - pb.cell;
-    if (dc.isZero()) return pa.local - pb.local;
-    return dc.cast<double>() * region_size + (pa.local - pb.local);
-  };
-  // Largest overlap ratio of the step, taken in list order (the first pair wins a tie).
-  double max_ratio = 0.0;
-  int worst_a = -1;
-  int worst_b = -1;
-  const auto gather = [&](int a, int b, const Eigen::Vector3d& force_on_a,
-                          const Eigen::Vector3d& lever_a, const Eigen::Vector3d& lever_b,
-                          double overlap_ratio) {
-    force_[a] += force_on_a;
-    torque_[a] += lever_a.cross(force_on_a);
-    force_[b] -= force_on_a;
-    torque_[b] -= lever_b.cross(force_on_a);
-    if (overlap_ratio > max_ratio) {
-      max_ratio = overlap_ratio;
-      worst_a = a;
-      worst_b = b;
-    }
-  };
+}
+
+inline Eigen::Vector3d DemWorld::hot_displacement(int a, int b) const {
+  return displacement_between(hot_position_[a], hot_position_[b], parameters_.region_size);
+}
+
+inline void DemWorld::gather(int a, int b, const PairResult& r, double overlap_ratio,
+                             WorstOverlap& worst) {
+  force_[a] += r.force_on_a;
+  torque_[a] += r.lever_a.cross(r.force_on_a);
+  force_[b] -= r.force_on_a;
+  torque_[b] -= r.lever_b.cross(r.force_on_a);
+  if (overlap_ratio > worst.ratio) worst = {overlap_ratio, a, b};
+}
+
+// evaluate() on the compact copies, without a ContactPair: the levers run from each anchor to
+// the contact point, the law takes the relative velocity there and keeps the spring in the
+// state. B is a sphere or cylinder here, never a triangle.
+inline bool DemWorld::pair_contact(int k, const Eigen::Vector3d& d, double dt, bool clip,
+                                   PairResult& r) {
+  PairSlot& slot = pair_slots_[k];
+  PairState& state = pair_states_[k];
+  const HotPosition& pa = hot_position_[slot.a];
+  const HotPosition& pb = hot_position_[slot.b];
+  const ContactGeometry g = slot.kind == PairKind::kSphereSphere
+                                ? sphere_sphere(d, pa.radius, pb.radius)
+                                : pair_geometry(*this, slot.a, slot.b, slot.kind, d);
+  if (!g.touching) {
+    separate(slot, state);
+    return false;
+  }
+  r.lever_a = g.point - d;
+  r.lever_b = g.point;
+  const HotVelocity& va = hot_velocity_[slot.a];
+  const HotVelocity& vb = hot_velocity_[slot.b];
+  const Eigen::Vector3d velocity_a = va.velocity + va.angular_velocity.cross(r.lever_a);
+  const Eigen::Vector3d velocity_b = vb.velocity + vb.angular_velocity.cross(r.lever_b);
+  r.force_on_a = contact_force(state.constants, g.overlap, g.normal, velocity_a - velocity_b, dt,
+                               clip, state.tangential_spring);
+  state.overlap = g.overlap;
+  state.overlap_ratio = g.overlap / std::min(pa.radius, pb.radius);
+  slot.touching = true;
+  return true;
+}
+
+void DemWorld::pair_contacts(double dt, bool clip, WorstOverlap& worst) {
+  const int threads = std::max(1, parameters_.threads);
   const int pair_count = static_cast<int>(pair_slots_.size());
-  const bool parallel_pairs = threads > 1 && pair_count > kParallelThreshold;
-  // Candidate k: a sphere pair farther apart than its radii is rejected with the comparison
-  // sphere_sphere() makes, reading only its slot. A touching pair runs the contact law on a
-  // ContactPair assembled on the stack and keeps its spring in the state. Returns whether it
-  // touches, with the force and levers in p.
-  const auto evaluate_pair = [&](int k, ContactPair& p) {
-    PairSlot& slot = pair_slots_[k];
-    const Eigen::Vector3d d = hot_displacement(slot.a, slot.b);
-    ContactGeometry g;
-    if (slot.kind == PairKind::kSphereSphere) {
-      if (d.squaredNorm() > slot.reach * slot.reach) {
-        if (slot.touching) release(pair_states_[k]);
-        slot.touching = false;
-        return false;
-      }
-      g = sphere_sphere(d, hot_position_[slot.a].radius, hot_position_[slot.b].radius);
-    } else {
-      g = pair_geometry(*this, slot.a, slot.b, slot.kind, d);
-    }
-    PairState& state = pair_states_[k];
-    if (!g.touching) {
-      if (slot.touching) release(state);
-      slot.touching = false;
-      return false;
-    }
-    p = candidate_pair(k);
-    // evaluate() on the compact copies; B is a sphere or cylinder here, never a triangle.
-    apply_law_at_contact_point(p, g, d, hot_velocity_[slot.a], hot_velocity_[slot.b], dt, clip);
-    p.overlap_ratio =
-        g.overlap / std::min(hot_position_[slot.a].radius, hot_position_[slot.b].radius);
-    state.tangential_spring = p.tangential_spring;
-    state.overlap = p.overlap;
-    state.overlap_ratio = p.overlap_ratio;
-    slot.touching = true;
-    return true;
+  // The array starts and the region size as locals: the loop stores bool flags, which may alias
+  // any member, and read through this every candidate would reload them.
+  PairSlot* const slots = pair_slots_.data();
+  PairState* const states = pair_states_.data();
+  const HotPosition* const hot = hot_position_.data();
+  const double region_size = parameters_.region_size;
+  // A sphere pair farther apart than its radii is rejected with the comparison sphere_sphere()
+  // makes, reading only its slot and positions (three in four candidates of a settled pile); its
+  // flag is written only when it has just separated.
+  const auto apart = [&](const PairSlot& slot, const Eigen::Vector3d& d) {
+    return slot.kind == PairKind::kSphereSphere && d.squaredNorm() > slot.reach * slot.reach;
   };
-  if (parallel_pairs) {
+  if (threads > 1 && pair_count > kParallelThreshold) {
     pair_results_.resize(pair_slots_.size());
 #pragma omp parallel for schedule(dynamic, 512) num_threads(threads)
     for (int k = 0; k < pair_count; ++k) {
-      ContactPair p;
-      if (evaluate_pair(k, p)) pair_results_[k] = {p.force_on_a, p.lever_a, p.lever_b};
+      const Eigen::Vector3d d = displacement_between(hot[slots[k].a], hot[slots[k].b], region_size);
+      if (apart(slots[k], d)) {
+        separate(slots[k], states[k]);
+      } else {
+        pair_contact(k, d, dt, clip, pair_results_[k]);
+      }
     }
     for (int k = 0; k < pair_count; ++k) {
-      if (!pair_slots_[k].touching) continue;
-      const PairResult& r = pair_results_[k];
-      gather(pair_slots_[k].a, pair_slots_[k].b, r.force_on_a, r.lever_a, r.lever_b,
-             pair_states_[k].overlap_ratio);
+      const PairSlot& slot = slots[k];
+      if (slot.touching) gather(slot.a, slot.b, pair_results_[k], states[k].overlap_ratio, worst);
     }
-  } else {
-    // One pass: the triangle contacts below read only velocities, never force_, so gathering
-    // here adds to each element in the same order as gathering after them.
-    ContactPair p;
-    for (int k = 0; k < pair_count; ++k) {
-      // Inline rejection of a sphere pair that was apart and still is (three in four candidates
-      // of the settled pile), without the call into evaluate_pair; same test as there.
-      const PairSlot& slot = pair_slots_[k];
-      if (slot.kind == PairKind::kSphereSphere && !slot.touching) {
-        const Eigen::Vector3d d = hot_displacement(slot.a, slot.b);
-        if (d.squaredNorm() > slot.reach * slot.reach) continue;
-      }
-      if (evaluate_pair(k, p)) {
-        gather(p.a, p.b, p.force_on_a, p.lever_a, p.lever_b, p.overlap_ratio);
-      }
+    return;
+  }
+  // One pass: the triangle contacts read only velocities, never force_, so gathering here adds
+  // to each element in the same order as gathering after them.
+  PairResult r;
+  for (int k = 0; k < pair_count; ++k) {
+    const PairSlot& slot = slots[k];
+    const Eigen::Vector3d d = displacement_between(hot[slot.a], hot[slot.b], region_size);
+    if (apart(slot, d)) {
+      separate(slots[k], states[k]);
+    } else if (pair_contact(k, d, dt, clip, r)) {
+      gather(slot.a, slot.b, r, states[k].overlap_ratio, worst);
     }
   }
-  // Triangle contacts of one element are filtered together so that a sphere on a shared edge or
-  // vertex of a mesh, or on a flat mesh near an edge, gets one contact: deepest first, then a
-  // contact whose triangle point lies on or below the tangent plane of an accepted one is the
-  // same surface seen from a neighbouring triangle.
+}
+
+// Triangle contacts of one element are filtered together so that a sphere on a shared edge or
+// vertex of a mesh, or on a flat mesh near an edge, gets one contact: deepest first, then a
+// contact whose triangle point lies on or below the tangent plane of an accepted one is the same
+// surface seen from a neighbouring triangle.
+void DemWorld::triangle_group_contacts(int group, double dt, bool clip, TriangleScratch& scratch) {
+  const int begin = triangle_group_start_[group];
+  const int end = triangle_group_start_[group + 1];
+  std::vector<ContactGeometry>& geometry = scratch.geometry;
+  std::vector<int>& order = scratch.order;
+  geometry.resize(end - begin);
+  order.clear();
+  for (int k = begin; k < end; ++k) {
+    const ContactPair& p = triangle_pairs_[k];
+    ContactGeometry& g = geometry[k - begin];
+    // The moving element through the compact copy (its Element is a cache miss: these are the
+    // elements next to a wall, spread over the array); triangles are few and stay cached.
+    const Eigen::Vector3d d = hot_displacement(p.a, p.b);
+    if (p.kind == PairKind::kSphereTriangle) {
+      const Element& tri = elements_[p.b];
+      const double radius = hot_position_[p.a].radius;
+      // A sphere farther from the triangle's plane than its radius cannot touch it (the closest
+      // point of the triangle is no nearer than the plane); the slack of 1e-9 radius is far
+      // above the round-off of both distances (1e-16 m here), so exactly the pairs
+      // sphere_triangle() finds apart are skipped.
+      if (std::abs(d.dot(tri.normal)) > radius * (1.0 + 1e-9)) {
+        g = ContactGeometry{};
+        continue;
+      }
+      g = sphere_triangle(d, radius, tri.edge1, tri.edge2, tri.normal);
+    } else {
+      g = pair_geometry(*this, p.a, p.b, p.kind, d);
+    }
+    if (g.touching) order.push_back(k - begin);
+  }
+  std::sort(order.begin(), order.end(), [&](int l, int r) {
+    return geometry[l].overlap != geometry[r].overlap ? geometry[l].overlap > geometry[r].overlap
+                                                      : l < r;
+  });
+  const bool is_sphere = triangle_pairs_[begin].kind == PairKind::kSphereTriangle;
+  const double tolerance = 1e-6 * elements_[triangle_pairs_[begin].a].radius;
+  std::vector<char>& accepted = scratch.accepted;
+  accepted.assign(end - begin, 0);
+  for (std::size_t oi = 0; oi < order.size(); ++oi) {
+    const ContactGeometry& gj = geometry[order[oi]];
+    const Eigen::Vector3d qj = gj.point + 0.5 * gj.overlap * gj.normal;
+    bool keep = true;
+    for (std::size_t pi = 0; pi < oi && keep; ++pi) {
+      if (!accepted[order[pi]]) continue;
+      const ContactGeometry& gi = geometry[order[pi]];
+      const Eigen::Vector3d qi = gi.point + 0.5 * gi.overlap * gi.normal;
+      // Positions are in each triangle's own anchor frame: shift by the anchors' offset.
+      const Eigen::Vector3d shift =
+          displacement(triangle_pairs_[begin + order[oi]].b, triangle_pairs_[begin + order[pi]].b);
+      const Eigen::Vector3d gap = qj + shift - qi;
+      keep = is_sphere ? gap.dot(gi.normal) > tolerance : gap.norm() > tolerance;
+    }
+    accepted[order[oi]] = keep;
+  }
+  for (int k = begin; k < end; ++k) {
+    ContactPair& p = triangle_pairs_[k];
+    if (!accepted[k - begin]) {
+      release(p);
+      continue;
+    }
+    // evaluate() on the compact copies; B is a fixed triangle (its lever does not matter, its
+    // velocities are zero in the copy as in the Element).
+    const ContactGeometry& g = geometry[k - begin];
+    const Eigen::Vector3d d = hot_displacement(p.a, p.b);
+    apply_law_at_contact_point(p, g, d, hot_velocity_[p.a], hot_velocity_[p.b], dt, clip);
+    p.overlap_ratio = g.overlap / hot_position_[p.a].radius;
+  }
+}
+
+void DemWorld::triangle_contacts(double dt, bool clip, WorstOverlap& worst) {
+  const int threads = std::max(1, parameters_.threads);
   const int groups = static_cast<int>(triangle_group_start_.size()) - 1;
   const bool parallel_groups = threads > 1 && groups > kParallelThreshold / 8;
-#pragma omp parallel for schedule(dynamic, 64) if (parallel_groups) num_threads(threads)
-  for (int gi = 0; gi < groups; ++gi) {
-    const int begin = triangle_group_start_[gi];
-    const int end = triangle_group_start_[gi + 1];
-    thread_local std::vector<ContactGeometry> geometry;
-    thread_local std::vector<int> order;
-    geometry.resize(end - begin);
-    order.clear();
-    for (int k = begin; k < end; ++k) {
-      const ContactPair& p = triangle_pairs_[k];
-      // The moving element through the compact copy (its Element is a cache miss: these are
-      // the elements next to a wall, spread over the array); triangles are few and stay cached.
-      const Eigen::Vector3d d = hot_displacement(p.a, p.b);
-      if (p.kind == PairKind::kSphereTriangle) {
-        const Element& tri = elements_[p.b];
-        geometry[k - begin] =
-            sphere_triangle(d, hot_position_[p.a].radius, tri.edge1, tri.edge2, tri.normal);
-      } else {
-        geometry[k - begin] = pair_geometry(*this, p.a, p.b, p.kind, d);
-      }
-      if (geometry[k - begin].touching) order.push_back(k - begin);
+  if (parallel_groups) {
+#pragma omp parallel num_threads(threads)
+    {
+      TriangleScratch scratch;
+#pragma omp for schedule(dynamic, 64)
+      for (int gi = 0; gi < groups; ++gi) triangle_group_contacts(gi, dt, clip, scratch);
     }
-    std::sort(order.begin(), order.end(), [&](int l, int r) {
-      return geometry[l].overlap != geometry[r].overlap ? geometry[l].overlap > geometry[r].overlap
-                                                        : l < r;
-    });
-    const bool is_sphere = triangle_pairs_[begin].kind == PairKind::kSphereTriangle;
-    const double tolerance = 1e-6 * elements_[triangle_pairs_[begin].a].radius;
-    thread_local std::vector<char> accepted;
-    accepted.assign(end - begin, 0);
-    for (std::size_t oi = 0; oi < order.size(); ++oi) {
-      const ContactGeometry& gj = geometry[order[oi]];
-      const Eigen::Vector3d qj = gj.point + 0.5 * gj.overlap * gj.normal;
-      bool keep = true;
-      for (std::size_t pi = 0; pi < oi && keep; ++pi) {
-        if (!accepted[order[pi]]) continue;
-        const ContactGeometry& gi_ = geometry[order[pi]];
-        const Eigen::Vector3d qi = gi_.point + 0.5 * gi_.overlap * gi_.normal;
-        // Positions are in each triangle's own anchor frame: shift by the anchors' offset.
-        const Eigen::Vector3d shift = displacement(triangle_pairs_[begin + order[oi]].b,
-                                                   triangle_pairs_[begin + order[pi]].b);
-        const Eigen::Vector3d gap = qj + shift - qi;
-        keep = is_sphere ? gap.dot(gi_.normal) > tolerance : gap.norm() > tolerance;
-      }
-      accepted[order[oi]] = keep;
-    }
-    for (int k = begin; k < end; ++k) {
-      if (accepted[k - begin]) {
-        // evaluate() on the compact copies; B is a fixed triangle (its lever does not matter,
-        // its velocities are zero in the copy as in the Element).
-        ContactPair& p = triangle_pairs_[k];
-        const ContactGeometry& g = geometry[k - begin];
-        const Eigen::Vector3d d = hot_displacement(p.a, p.b);
-        apply_law_at_contact_point(p, g, d, hot_velocity_[p.a], hot_velocity_[p.b], dt, clip);
-        p.overlap_ratio = g.overlap / hot_position_[p.a].radius;
-      } else {
-        release(triangle_pairs_[k]);
-      }
-    }
+  } else {
+    thread_local TriangleScratch scratch;  // kept between steps: no allocation per step
+    for (int gi = 0; gi < groups; ++gi) triangle_group_contacts(gi, dt, clip, scratch);
   }
   for (const auto& p : triangle_pairs_) {
-    if (p.touching) gather(p.a, p.b, p.force_on_a, p.lever_a, p.lever_b, p.overlap_ratio);
+    if (p.touching) gather(p.a, p.b, {p.force_on_a, p.lever_a, p.lever_b}, p.overlap_ratio, worst);
   }
-  window_max_overlap_ = std::max(window_max_overlap_, max_ratio);
-  if (worst_a >= 0 && max_ratio > parameters_.max_overlap_ratio) {
+}
+
+void DemWorld::compute_forces(double dt) {
+  const bool clip = parameters_.clip_normal_force;
+  reset_forces();
+  WorstOverlap worst;
+  pair_contacts(dt, clip, worst);
+  triangle_contacts(dt, clip, worst);
+  window_max_overlap_ = std::max(window_max_overlap_, worst.ratio);
+  if (worst.a >= 0 && worst.ratio > parameters_.max_overlap_ratio) {
     std::ostringstream message;
-    message << "DEM overlap ratio " << max_ratio << " between elements " << worst_a << " and "
-            << worst_b << " exceeds max_overlap_ratio " << parameters_.max_overlap_ratio
+    message << "DEM overlap ratio " << worst.ratio << " between elements " << worst.a << " and "
+            << worst.b << " exceeds max_overlap_ratio " << parameters_.max_overlap_ratio
             << " at t = " << time_ << " s (time step too large or stiffness too low)";
     throw StabilityError(message.str());
   }
@@ -399,10 +442,14 @@ bool DemWorld::integrate(double dt, bool with_fluid) {
       hot_position_[i].cell = e.cell;
       hot_velocity_[i] = {e.velocity, e.angular_velocity};
     }
-    // The conditions of check_stability(), on the same values (position() is this sum).
+    // The conditions of check_stability() as one conservative test on the same values: a
+    // component that is not finite makes the sum not finite (a finite sum that overflows only
+    // runs the full check for nothing), and a NaN position fails both comparisons.
+    // position() is this sum.
     const Eigen::Vector3d p = e.cell.cast<double>() * size + e.local;
-    if (!e.local.allFinite() || !e.velocity.allFinite() || !e.angular_momentum.allFinite() ||
-        (p.array() < domain_min.array()).any() || (p.array() > domain_max.array()).any()) {
+    const double sum = e.local.sum() + e.velocity.sum() + e.angular_momentum.sum();
+    if (!std::isfinite(sum) || !(p.array() >= domain_min.array()).all() ||
+        !(p.array() <= domain_max.array()).all()) {
       suspect = true;
     }
   }

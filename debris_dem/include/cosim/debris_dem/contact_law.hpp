@@ -62,51 +62,64 @@ double clipped_restitution(double zeta);
 // only for an overdamped dashpot, zeta > 1).
 double damping_ratio_for_restitution(double e, bool clipped);
 
-// Evaluates the force on A for a touching geometry and relative velocity v_A - v_B at the
-// contact point; updates the tangential spring. clip: total normal force >= 0.
+// The law on a pair's constants and tangential spring (m, world frame, advanced here): the force
+// on A (N) for a touching geometry with the given overlap (m) and unit normal n from B to A, and
+// the relative velocity v_A - v_B (m/s) at the contact point over a step of dt (s).
+// clip: total normal force >= 0.
 // The Coulomb limit is friction times the normal force the contact transmits over an impact:
 // clipped, the total (spring + dashpot, >= 0); unclipped, the spring part k delta (Cundall &
 // Strack, Geotechnique 29 (1979) 47-65, who check the elastic forces against Coulomb before
 // adding the dashpots). The dashpot's impulse c [delta] vanishes over a whole unclipped contact,
 // so either way the friction impulse of a sliding impact is mu times its normal impulse, as in
 // the rigid-body closed forms (references/dem_contact.md), and friction never pushes.
-// Inline: the contact loop calls it for every touching pair of every step.
-inline void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
-                              const Eigen::Vector3d& relative_velocity, double dt, bool clip) {
-  const Eigen::Vector3d& n = geometry.normal;
-  pair.touching = true;
-  pair.overlap = geometry.overlap;
+// Inline: the contact loop calls it for every touching pair of every step, on its compact pair
+// state (no ContactPair is assembled there).
+inline Eigen::Vector3d contact_force(const PairConstants& c, double overlap,
+                                     const Eigen::Vector3d& n,
+                                     const Eigen::Vector3d& relative_velocity, double dt, bool clip,
+                                     Eigen::Vector3d& tangential_spring) {
   // Normal: P_n = K_n delta_n plus the dashpot; approach (v.n < 0) compresses.
   const double normal_velocity = relative_velocity.dot(n);
-  double normal_force =
-      pair.normal_stiffness * geometry.overlap - pair.normal_damping * normal_velocity;
+  double normal_force = c.normal_stiffness * overlap - c.normal_damping * normal_velocity;
   if (clip && normal_force < 0.0) normal_force = 0.0;  // fig. 3a: no tension
 
   // Tangential: rotate the stored shear onto the current tangent plane (the local frame of the
   // pair spring turns with the contact, eq. 10-12), keep its length, add this step's increment.
   const Eigen::Vector3d tangential_velocity = relative_velocity - normal_velocity * n;
-  Eigen::Vector3d spring = pair.tangential_spring;
+  Eigen::Vector3d spring = tangential_spring;
   const double old_length = spring.norm();
   spring -= spring.dot(n) * n;
   const double new_length = spring.norm();
   if (new_length > 0.0) spring *= old_length / new_length;
   spring += tangential_velocity * dt;  // eq. (11): S(t) = S(t - dt) + k dq
   Eigen::Vector3d tangential_force =
-      -pair.tangential_stiffness * spring - pair.tangential_damping * tangential_velocity;
+      -c.tangential_stiffness * spring - c.tangential_damping * tangential_velocity;
   // Mohr-Coulomb, cohesion 0 (fig. 3b): |P_s| <= P_n tan(phi), P_n the transmitted normal force
-  // (see the header: clipped total, or the spring part when the dashpot may pull). While sliding
-  // the spring holds exactly the limit force, so sliding stops smoothly when the load drops.
-  const double coulomb_load = clip ? normal_force : pair.normal_stiffness * geometry.overlap;
-  const double limit = pair.friction * std::max(coulomb_load, 0.0);
+  // (see above: clipped total, or the spring part when the dashpot may pull). While sliding the
+  // spring holds exactly the limit force, so sliding stops smoothly when the load drops.
+  const double coulomb_load = clip ? normal_force : c.normal_stiffness * overlap;
+  const double limit = c.friction * std::max(coulomb_load, 0.0);
   const double magnitude = tangential_force.norm();
   if (magnitude > limit) {
     tangential_force *= magnitude > 0.0 ? limit / magnitude : 0.0;
-    spring = pair.tangential_stiffness > 0.0
-                 ? Eigen::Vector3d(-tangential_force / pair.tangential_stiffness)
+    spring = c.tangential_stiffness > 0.0
+                 ? Eigen::Vector3d(-tangential_force / c.tangential_stiffness)
                  : Eigen::Vector3d::Zero();
   }
-  pair.tangential_spring = spring;
-  pair.force_on_a = normal_force * n + tangential_force;
+  tangential_spring = spring;
+  return normal_force * n + tangential_force;
+}
+
+// contact_force() on a ContactPair: evaluates the force on A for a touching geometry and
+// relative velocity v_A - v_B at the contact point; updates the tangential spring.
+inline void apply_contact_law(ContactPair& pair, const ContactGeometry& geometry,
+                              const Eigen::Vector3d& relative_velocity, double dt, bool clip) {
+  pair.touching = true;
+  pair.overlap = geometry.overlap;
+  const PairConstants c{pair.normal_stiffness, pair.tangential_stiffness, pair.normal_damping,
+                        pair.tangential_damping, pair.friction};
+  pair.force_on_a = contact_force(c, geometry.overlap, geometry.normal, relative_velocity, dt, clip,
+                                  pair.tangential_spring);
 }
 
 // Energy held by the pair's springs (normal 0.5 k delta^2, tangential 0.5 k_s |xi|^2).

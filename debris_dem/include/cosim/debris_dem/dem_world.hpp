@@ -210,9 +210,35 @@ class DemWorld {
   // Reads and writes the evolving state (checkpoint.cpp); materials come from the scene.
   friend struct DemWorldCheckpoint;
 
+  // Largest overlap ratio of a step and its pair, taken in gather order (the first pair wins a
+  // tie).
+  struct WorstOverlap {
+    double ratio = 0.0;
+    int a = -1;
+    int b = -1;
+  };
+  // Per-thread scratch of the triangle filter (one moving element's triangle candidates).
+  struct TriangleScratch {
+    std::vector<ContactGeometry> geometry;
+    std::vector<int> order;
+    std::vector<char> accepted;
+  };
+
   int add_element(Element element, const Eigen::Vector3d& anchor, const Material& material);
   int material_index(const Material& material);
   void compute_forces(double dt);
+  // Force and torque start from gravity; the compact copies are refreshed if stale.
+  void reset_forces();
+  // displacement(a, b) on the compact copies (same operations, same result).
+  [[nodiscard]] Eigen::Vector3d hot_displacement(int a, int b) const;
+  // Adds a pair's force to both elements (A gets force_on_a, B minus it) and notes its ratio.
+  void gather(int a, int b, const PairResult& r, double overlap_ratio, WorstOverlap& worst);
+  // Candidate k (sphere or cylinder pair) with d = hot_displacement(a, b): geometry and contact
+  // law on its slot and state; false (spring released) when apart.
+  bool pair_contact(int k, const Eigen::Vector3d& d, double dt, bool clip, PairResult& r);
+  void pair_contacts(double dt, bool clip, WorstOverlap& worst);
+  void triangle_contacts(double dt, bool clip, WorstOverlap& worst);
+  void triangle_group_contacts(int group, double dt, bool clip, TriangleScratch& scratch);
   // with_fluid: use the added mass and fluid acceleration apply_fluid() left for this sub-step.
   // Returns whether an element may fail check_stability() (a value not finite or a position
   // outside the domain), tested on the values just computed; only then is the check run.
