@@ -102,11 +102,8 @@ void remove_partition_crossings(NeighbourList& list, const std::vector<Eigen::Ve
 }
 
 OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings settings)
-    : system_(system),
-      settings_(settings),
-      velocity_(settings.velocity),
-      rows_(settings.inflow_rows),
-      last_dissolution_time_(system.time()) {
+    : system_(system), settings_(settings), state_{settings.velocity,   0.0, system.time(), 0, 0,
+                                                   settings.inflow_rows} {
   const OpenBoundarySettings& s = settings_;
   const int dimension = system.parameters().dimension;
   const double l0 = system.parameters().particle_spacing;
@@ -122,11 +119,11 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
   if (s.level_offset < 0.0) settings_.level_offset = 2.0 * l0;
   if (s.control == OpenBoundarySettings::Control::discharge) {
     if (!(s.discharge > 0.0)) throw std::invalid_argument("OpenBoundaries: discharge must be > 0");
-    velocity_ = s.discharge / (rows_ * l0);
+    state_.velocity = s.discharge / (state_.rows * l0);
   }
   if (s.control == OpenBoundarySettings::Control::level) {
     if (!(s.target_level > 0.0)) throw std::invalid_argument("OpenBoundaries: target_level > 0");
-    rows_ = std::clamp(static_cast<int>(std::lround(s.target_level / l0)), 1, s.block_rows);
+    state_.rows = std::clamp(static_cast<int>(std::lround(s.target_level / l0)), 1, s.block_rows);
   }
   for (int i = 0; i < system.particle_count(); ++i) {
     const Eigen::Vector3d& x = system.positions()[i];
@@ -140,25 +137,16 @@ OpenBoundaries::OpenBoundaries(FluidSystem& system, OpenBoundarySettings setting
   set_block_velocity();
 }
 
-OpenBoundaryState OpenBoundaries::state() const {
-  return {velocity_, level_, last_dissolution_time_, dissolved_total_, recycled_total_, rows_};
-}
-
 void OpenBoundaries::restore(const OpenBoundaryState& state) {
-  velocity_ = state.velocity;
-  level_ = state.level;
-  last_dissolution_time_ = state.last_dissolution_time;
-  dissolved_total_ = state.dissolved_total;
-  recycled_total_ = state.recycled_total;
-  rows_ = static_cast<int>(state.rows);
+  state_ = state;
   set_block_velocity();
 }
 
 double OpenBoundaries::wall_speed() const {
   const double ramp = settings_.ramp_time;
-  if (!(ramp > 0.0)) return velocity_;
+  if (!(ramp > 0.0)) return state_.velocity;
   // Scene time, so a restarted run does not ramp again.
-  return velocity_ * std::clamp(system_.time() / ramp, 0.0, 1.0);
+  return state_.velocity * std::clamp(system_.time() / ramp, 0.0, 1.0);
 }
 
 void OpenBoundaries::set_block_velocity() {
@@ -191,7 +179,7 @@ double OpenBoundaries::volume_of(double particles) const {
 }
 
 double OpenBoundaries::inflow_volume() const {
-  return volume_of(static_cast<double>(dissolved_total_));
+  return volume_of(static_cast<double>(state_.dissolved_total));
 }
 
 int remove_fluid_beyond(FluidSystem& system, double outlet_x) {
@@ -219,7 +207,7 @@ BoundaryUpdate OpenBoundaries::update() {
       ++result.recycled;
     }
   }
-  recycled_total_ += result.recycled;
+  state_.recycled_total += result.recycled;
   pool_cursor_ = 0;  // reuse the lowest free slots first
 
   // Soluble moving wall: columns whose particles passed the inflow line dissolve.
@@ -247,9 +235,9 @@ BoundaryUpdate OpenBoundaries::update() {
   const double bed_area = up_ == 2 ? s.level_window * s.width : s.level_window;
   const double mean_depth = volume_of(inside) / bed_area;
   if (s.level_measure == OpenBoundarySettings::LevelMeasure::highest) {
-    level_ = std::isfinite(top) ? top + 0.5 * l0 - s.bed_height : 0.0;
+    state_.level = std::isfinite(top) ? top + 0.5 * l0 - s.bed_height : 0.0;
   } else {
-    level_ = mean_depth;
+    state_.level = mean_depth;
   }
   // Water above the block would pour back over it: the inflow cannot hold that level. The mean
   // depth is used whatever the control measures, so a single splash does not count.
@@ -265,17 +253,19 @@ BoundaryUpdate OpenBoundaries::update() {
     case OpenBoundarySettings::Control::velocity:
       break;
     case OpenBoundarySettings::Control::discharge:
-      rows_ = std::clamp(static_cast<int>(std::lround(level_ / l0)), 1, s.block_rows);
-      velocity_ = s.discharge / (rows_ * l0);
+      state_.rows = std::clamp(static_cast<int>(std::lround(state_.level / l0)), 1, s.block_rows);
+      state_.velocity = s.discharge / (state_.rows * l0);
       break;
     case OpenBoundarySettings::Control::level:
-      velocity_ += s.level_gain * (s.target_level - level_) * (now - last_dissolution_time_);
-      velocity_ = std::clamp(velocity_, s.min_velocity, s.max_velocity);
+      state_.velocity +=
+          s.level_gain * (s.target_level - state_.level) * (now - state_.last_dissolution_time);
+      state_.velocity = std::clamp(state_.velocity, s.min_velocity, s.max_velocity);
       break;
   }
-  last_dissolution_time_ = now;
-  // Dissolve: rows below rows_ become fluid, the others return to the pool. Dissolution uses
-  // the velocity the column travelled with, so the released volume is exactly rows_ l0 x l0.
+  state_.last_dissolution_time = now;
+  // Dissolve: the rows below the control's count become fluid, the others return to the pool.
+  // Dissolution uses the velocity the column travelled with, so the released volume is exactly
+  // that many rows of l0 x l0 cells.
   double column_x = std::numeric_limits<double>::infinity();
   for (int i : kept) column_x = std::min(column_x, system_.positions()[i].x());
   std::vector<double> passed_x;
@@ -289,14 +279,14 @@ BoundaryUpdate OpenBoundaries::update() {
     const Eigen::Vector3d x = system_.positions()[i];
     const Eigen::Vector3d u = system_.velocities()[i];
     const int row = static_cast<int>(std::floor((height(x) - s.bed_height) / l0));
-    if (row < rows_) {
+    if (row < state_.rows) {
       system_.set_particle(i, ParticleKind::fluid, x, u);
       ++result.dissolved;
     } else {
       system_.set_particle(i, ParticleKind::inactive, x, Eigen::Vector3d::Zero());
     }
   }
-  dissolved_total_ += result.dissolved;
+  state_.dissolved_total += result.dissolved;
   // New columns behind the block, one per dissolved column, l0 apart.
   if (!std::isfinite(column_x)) column_x = passed_x.front();
   block_ = kept;

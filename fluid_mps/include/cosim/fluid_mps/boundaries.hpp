@@ -99,8 +99,9 @@ struct BoundaryUpdate {
 };
 
 // The running state of an OpenBoundaries that its particles do not hold (the block and the pool
-// are re-derived from their kinds): what a checkpoint carries so that a restarted run releases
-// the same columns at the same times as the uninterrupted one. Plain values, written as bytes.
+// are re-derived from their kinds), kept in this one record: what a checkpoint carries so that a
+// restarted run releases the same columns at the same times as the uninterrupted one. Plain
+// values, written as bytes.
 struct OpenBoundaryState {
   double velocity = 0.0;               // [m/s] the control's wall speed
   double level = 0.0;                  // [m] the last measured level
@@ -119,19 +120,19 @@ class OpenBoundaries {
   BoundaryUpdate update();
 
   // Current wall (inflow) velocity without the soft start [m/s]; the wall moves at wall_speed().
-  double velocity() const { return velocity_; }
+  double velocity() const { return state_.velocity; }
   double wall_speed() const;
-  int inflow_rows() const { return rows_; }
-  double measured_level() const { return level_; }  // last level above bed_height [m]
-  long dissolved_total() const { return dissolved_total_; }
-  long recycled_total() const { return recycled_total_; }
+  int inflow_rows() const { return static_cast<int>(state_.rows); }
+  double measured_level() const { return state_.level; }  // last level above bed_height [m]
+  long dissolved_total() const { return state_.dissolved_total; }
+  long recycled_total() const { return state_.recycled_total; }
   // Fluid volume (area in 2D) released at the inflow so far [m^3, m^2 in 2D]: l0^d a particle.
   double inflow_volume() const;
   int pool_size() const;
   const std::vector<int>& block() const { return block_; }
   const OpenBoundarySettings& settings() const { return settings_; }
 
-  OpenBoundaryState state() const;
+  const OpenBoundaryState& state() const { return state_; }
   // Takes over a state saved by state() (of the same scene), and moves the block at its speed.
   void restore(const OpenBoundaryState& state);
 
@@ -149,12 +150,7 @@ class OpenBoundaries {
   int up_ = 1;      // the vertical axis: y in 2D, z in 3D
   int across_ = 1;  // particles across the width in a row (1 in 2D)
   std::vector<int> block_;
-  double velocity_;
-  int rows_;
-  double level_ = 0.0;
-  double last_dissolution_time_;
-  long dissolved_total_ = 0;
-  long recycled_total_ = 0;
+  OpenBoundaryState state_;
   int pool_cursor_ = 0;
 };
 
