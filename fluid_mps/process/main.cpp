@@ -116,7 +116,8 @@ class FluidProcess final : public coupler::Solver {
                        config_.reference->average_from,
                        periodic ? scene.fill_discharge : scene.inflow.discharge, periodic);
     } else if (config_.reference && config_.reference->kind == "free_overfall") {
-      overfall_.emplace(scene.length, scene.inflow.discharge, config_.reference->average_from);
+      overfall_.emplace(scene.length, scene.inflow.discharge, config_.reference->average_from,
+                        *system_, *open_boundaries_);
     } else if (config_.reference) {
       // Gravity along the library's vertical: y of the 2D plane, z in 3D.
       const int dimension = config_.parameters.dimension;

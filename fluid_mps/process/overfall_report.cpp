@@ -6,21 +6,16 @@
 
 namespace cosim::mps {
 
-OverfallReport::OverfallReport(double brink_x, double discharge, double average_from)
-    : brink_x_(brink_x), discharge_(discharge), average_from_(average_from) {}
+OverfallReport::OverfallReport(double brink_x, double discharge, double average_from,
+                               const FluidSystem& system, const OpenBoundaries& boundaries)
+    : brink_x_(brink_x),
+      discharge_(discharge),
+      average_from_(average_from),
+      critical_depth_(std::cbrt(discharge * discharge / system.parameters().gravity.norm())),
+      particle_volume_(fill_volume_per_particle(system.parameters())),
+      width_(system.parameters().dimension == 3 ? boundaries.settings().width : 1.0) {}
 
-double OverfallReport::band_depth(const FluidSystem& system, double x0, double x1, double width) {
-  const MpsParameters& p = system.parameters();
-  int inside = 0;
-  for (int i = 0; i < system.particle_count(); ++i) {
-    if (system.kinds()[i] != ParticleKind::fluid) continue;
-    const double x = system.positions()[i].x();
-    inside += x >= x0 && x < x1;
-  }
-  return inside * fill_volume_per_particle(p) / ((x1 - x0) * (p.dimension == 3 ? width : 1.0));
-}
-
-double OverfallReport::energy_coefficient(const FluidSystem& system, double x0, double x1) {
+OverfallReport::Band OverfallReport::band(const FluidSystem& system, double x0, double x1) const {
   double sum_u = 0.0, sum_u3 = 0.0;
   int count = 0;
   for (int i = 0; i < system.particle_count(); ++i) {
@@ -32,17 +27,16 @@ double OverfallReport::energy_coefficient(const FluidSystem& system, double x0, 
     sum_u3 += u * u * u;
     ++count;
   }
-  if (count == 0 || !(sum_u > 0.0)) return 0.0;
-  const double mean = sum_u / count;
-  return sum_u3 / count / (mean * mean * mean);
+  Band result;
+  result.depth = count * particle_volume_ / ((x1 - x0) * width_);
+  if (count > 0 && sum_u > 0.0) {
+    const double mean = sum_u / count;
+    result.energy_coefficient = sum_u3 / count / (mean * mean * mean);
+  }
+  return result;
 }
 
 void OverfallReport::observe(const FluidSystem& system, const OpenBoundaries& boundaries) {
-  const MpsParameters& p = system.parameters();
-  const double l0 = p.particle_spacing;
-  critical_depth_ = std::cbrt(discharge_ * discharge_ / p.gravity.norm());
-  particle_volume_ = fill_volume_per_particle(p);
-  width_ = p.dimension == 3 ? boundaries.settings().width : 1.0;
   if (system.time() < average_from_) return;
   if (!averaging_) {
     averaging_ = true;
@@ -54,10 +48,12 @@ void OverfallReport::observe(const FluidSystem& system, const OpenBoundaries& bo
   released_end_ = boundaries.dissolved_total();
   recycled_end_ = boundaries.recycled_total();
   // The brink: the last cell of the bed. Upstream: two cells around 4 h_c before it.
-  brink_sum_ += band_depth(system, brink_x_ - l0, brink_x_, width_);
+  const double l0 = system.parameters().particle_spacing;
+  brink_sum_ += band(system, brink_x_ - l0, brink_x_).depth;
   const double upstream = brink_x_ - 4.0 * critical_depth_;
-  upstream_sum_ += band_depth(system, upstream - l0, upstream + l0, width_);
-  alpha_sum_ += energy_coefficient(system, upstream - l0, upstream + l0);
+  const Band near_critical = band(system, upstream - l0, upstream + l0);
+  upstream_sum_ += near_critical.depth;
+  alpha_sum_ += near_critical.energy_coefficient;
   ++samples_;
 }
 

@@ -21,29 +21,34 @@ inline constexpr double kRouseEndDepthRatio = 0.715;
 
 class OverfallReport {
  public:
-  // brink_x: the end of the bed (the library's x) [m]; discharge: q per width [m^2/s].
-  OverfallReport(double brink_x, double discharge, double average_from);
+  // brink_x: the end of the bed (the library's x) [m]; discharge: q per width [m^2/s]. The
+  // system and its open boundaries give gravity, the particles' volume and the channel's width.
+  OverfallReport(double brink_x, double discharge, double average_from, const FluidSystem& system,
+                 const OpenBoundaries& boundaries);
   // After every window.
   void observe(const FluidSystem& system, const OpenBoundaries& boundaries);
   void report(coupler::MetricsReport& report) const;
 
-  // The mean depth of the water over x in [x0, x1): its volume there over the bed area (the band's
-  // length, times the channel's width in 3D) [m].
-  static double band_depth(const FluidSystem& system, double x0, double x1, double width);
-  // The energy (Coriolis) coefficient of the streamwise velocity over the water in [x0, x1):
-  // alpha = mean(u^3) / mean(u)^3 over its particles (equal volumes), 1 for a uniform profile,
-  // 1.54 for the laminar half-parabola of a film (Chow 1959, 2-7). 0 when no water moves there.
-  static double energy_coefficient(const FluidSystem& system, double x0, double x1);
+  // The water over x in [x0, x1): its mean depth (its volume there over the bed area: the band's
+  // length, times the width in 3D) [m] and the energy (Coriolis) coefficient of its streamwise
+  // velocity, alpha = mean(u^3) / mean(u)^3 over its particles (equal volumes): 1 for a uniform
+  // profile, 1.54 for the laminar half-parabola of a film (Chow 1959, 2-7); 0 when no water
+  // moves there.
+  struct Band {
+    double depth = 0, energy_coefficient = 0;
+  };
+  Band band(const FluidSystem& system, double x0, double x1) const;
 
  private:
   double brink_x_, discharge_, average_from_;
-  double critical_depth_ = 0;
+  double critical_depth_;   // (q^2 / g)^(1/3) [m]
+  double particle_volume_;  // [m^3, m^2 in 2D]
+  double width_;            // of the channel in 3D, 1 in 2D [m]
   bool averaging_ = false;
   int samples_ = 0;
   double brink_sum_ = 0, upstream_sum_ = 0, alpha_sum_ = 0;
   double start_time_ = 0, end_time_ = 0;
   long released_start_ = 0, released_end_ = 0, recycled_start_ = 0, recycled_end_ = 0;
-  double particle_volume_ = 0, width_ = 1;
 };
 
 }  // namespace cosim::mps
