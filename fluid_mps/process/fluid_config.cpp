@@ -165,13 +165,14 @@ double estimated_particles(const SceneSettings& s, const MpsParameters& p) {
   if (s.kind == "pool_fishway" || s.kind == "periodic_pool") water = fishway_length * height;
   const double l0 = p.particle_spacing;
   const double layers = (s.wall_layers + s.dummy_layers) * l0;
+  const double pool = s.kind == "open_channel" ? s.pool_particles : 0.0;  // its inflow's
   if (p.dimension == 3) {
     const double width = std::max(s.tank_width, l0);
     return (water * width + 2.0 * (length * height + length * width + height * width) * layers) /
                (l0 * l0 * l0) +
-           s.pool_particles;
+           pool;
   }
-  return (water + (2.0 * height + length) * layers) / (l0 * l0) + s.pool_particles;
+  return (water + (2.0 * height + length) * layers) / (l0 * l0) + pool;
 }
 
 // The process reads the frame at its start: an unreadable file or a frame it lacks is refused
