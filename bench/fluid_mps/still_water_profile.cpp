@@ -191,7 +191,7 @@ class Profile {
     }
     for (std::size_t k = 0; k < probe_depths_.size(); ++k) {
       const Eigen::Vector3d probe(0.5 * length_, 0.5 * width_, depth_ - probe_depths_[k]);
-      probe_sum_[k] += mean_pressure_at(system, probe, probe_radius_);
+      probe_sum_[k] += hydrostatic_pressure_at(system, probe, probe_radius_);
       for (int i = 0; i < system.particle_count(); ++i) {
         probe_count_[k] +=
             system.kinds()[i] == ParticleKind::fluid && (x[i] - probe).norm() < probe_radius_;

@@ -157,7 +157,8 @@ void visit_parameters(P& p, V& v) {
         .unit("m")
         .in(Range::positive())
         .shown_default("1.5 particle_spacing")
-        .doc("particles within it are averaged"),
+        .doc("particles within it are averaged, each pressure carried hydrostatically to the "
+             "probe"),
     r.probe_radius);
 }
 

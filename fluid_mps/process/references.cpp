@@ -111,7 +111,7 @@ void ReferenceTracker::observe(const FluidSystem& system, const FluidImpulses& i
     const Eigen::Vector3d probe = dimension_ == 3
                                       ? Eigen::Vector3d(settings_.probe_x, probe_across_, height)
                                       : Eigen::Vector3d(settings_.probe_x, height, 0.0);
-    pressure_sums_[i] += mean_pressure_at(system, probe, radius);
+    pressure_sums_[i] += hydrostatic_pressure_at(system, probe, radius);
   }
   // Water at rest should stay at rest: the mean kinetic energy per mass is the noise of the
   // pressure-gradient model (issue 16 compares the models by it).

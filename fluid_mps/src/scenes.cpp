@@ -108,4 +108,20 @@ double mean_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point,
   return count > 0 ? sum / count : 0.0;
 }
 
+double hydrostatic_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point,
+                               double radius) {
+  const MpsParameters& p = system.parameters();
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i < system.particle_count(); ++i) {
+    if (system.kinds()[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d offset = point - system.positions()[i];
+    if (offset.norm() < radius) {
+      sum += system.pressures()[i] + p.density * p.gravity.dot(offset);
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
 }  // namespace cosim::mps

@@ -58,3 +58,24 @@ TEST(MpsStillWater, HydrostaticPressureAndRest) {
   EXPECT_LT(max_speed, 0.1);
   EXPECT_LT(max_height, depth + 0.5 * l0);
 }
+
+// The hydrostatic probe reads a hydrostatic field exactly wherever its sample's centroid lies;
+// the plain mean reads rho g times the centroid's offset from the probe. A probe 0.3 l0 above a
+// lattice row takes in one row more below than above it.
+TEST(MpsStillWater, HydrostaticProbeIsExactOnAHydrostaticField) {
+  const double l0 = 0.01, depth = 0.1;
+  MpsParameters p = quiet_parameters(l0);
+  FluidSystem settled(p, still_water_tank(p, 0.1, depth, 0.15));
+  MpsState state = settled.save_state();
+  const double rho_g = p.density * -p.gravity.y();
+  for (std::size_t i = 0; i < state.positions.size(); ++i) {
+    state.pressures[i] = rho_g * (depth - state.positions[i].y());
+  }
+  const FluidSystem system(p, state);
+  const Eigen::Vector3d probe(0.05, 0.053, 0.0);  // 0.3 l0 above the row at 0.05 m
+  const double exact = rho_g * (depth - probe.y());
+  EXPECT_NEAR(hydrostatic_pressure_at(system, probe, 1.5 * l0), exact, 1e-9 * exact);
+  const double plain = mean_pressure_at(system, probe, 1.5 * l0);
+  EXPECT_GT(std::abs(plain - exact), 0.02 * exact) << "the sample's centroid is below the probe";
+  EXPECT_EQ(hydrostatic_pressure_at(system, Eigen::Vector3d(0.05, 0.5, 0.0), 1.5 * l0), 0.0);
+}
