@@ -66,6 +66,9 @@ class Coupler::ImplicitWindows {
     result_.acceleration = acceleration_name(accelerator_.options().kind);
     for (const auto* solid : c_.scene_.solids()) solids_.push_back(solid->acts_as);
     blocks_ = iterated_blocks();
+    for (const auto& block : blocks_) {
+      result_.convergence_fields.push_back(block.field + " of " + block.sender);
+    }
   }
 
   // Window 0 (or the restart window) is the initial exchange, not iterated; every later window
@@ -120,6 +123,7 @@ class Coupler::ImplicitWindows {
                                   c_.window_text(index)));
       }
       const auto measure = measure_convergence(blocks_, x, h, settings_.relative_tolerance);
+      result_.convergence.push_back({index, c_.plan_[index].first, iteration, measure.ratios});
       if (measure.converged) return iteration;
       if (iteration + 1 >= settings_.max_iterations) {
         ++result_.windows_at_max_iterations;

@@ -10,7 +10,9 @@ ConvergenceMeasure measure_convergence(const std::vector<FieldBlock>& blocks,
                                        const Eigen::VectorXd& x, const Eigen::VectorXd& h,
                                        double relative) {
   ConvergenceMeasure measure;
-  for (const auto& block : blocks) {
+  measure.ratios.assign(blocks.size(), 0.0);
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const auto& block = blocks[b];
     if (block.size == 0) continue;
     const double change =
         (h.segment(block.offset, block.size) - x.segment(block.offset, block.size)).norm();
@@ -23,6 +25,7 @@ ConvergenceMeasure measure_convergence(const std::vector<FieldBlock>& blocks,
     const double by_absolute = block.absolute > 0.0 ? rms / block.absolute : rms == 0.0 ? 0.0 : inf;
     double ratio = std::min(by_relative, by_absolute);
     if (!std::isfinite(change)) ratio = inf;  // NaN: never converged
+    measure.ratios[b] = ratio;
     if (ratio > 1.0) measure.converged = false;
     if (ratio > measure.worst || measure.worst_field.empty()) {
       measure.worst = std::max(measure.worst, ratio);

@@ -9,6 +9,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "command.hpp"
 #include "cosim/output/point_series.hpp"
@@ -106,6 +110,37 @@ TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
   EXPECT_LT(most, implicit["max_iterations"].get<int>());
   std::printf("iterations per window: mean %.2f, max %d, total %d over %zu windows\n",
               implicit["iterations_mean"].get<double>(), most, total, per_window.size());
+  // implicit_convergence.csv: a row per iteration, each field's residual over its tolerance;
+  // the last row of every window converged (all <= 1), the rows before it not.
+  std::ifstream csv(run.folder / "implicit_convergence.csv");
+  ASSERT_TRUE(csv) << run.folder;
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("window,time,iteration,", 0), 0u) << line;
+  EXPECT_NE(line.find("\"velocities of vegetation_beam\""), std::string::npos) << line;
+  const auto fields = static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) - 2;
+  std::vector<std::vector<double>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<double> row;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
+    ASSERT_EQ(row.size(), fields + 3) << line;
+    rows.push_back(row);
+  }
+  ASSERT_EQ(static_cast<int>(rows.size()), total);
+  std::size_t k = 0;
+  for (std::size_t w = 0; w < per_window.size(); ++w) {
+    for (int i = 0; i < per_window[w]; ++i, ++k) {
+      EXPECT_EQ(rows[k][0], static_cast<double>(w + 1)) << "row " << k;
+      EXPECT_EQ(rows[k][2], static_cast<double>(i)) << "row " << k;
+      const double worst = *std::max_element(rows[k].begin() + 3, rows[k].end());
+      if (i + 1 == per_window[w]) {
+        EXPECT_LE(worst, 1.0) << "window " << w + 1 << " accepted unconverged";
+      } else {
+        EXPECT_GT(worst, 1.0) << "window " << w + 1 << " iterated past convergence";
+      }
+    }
+  }
   // The replay plays every recorded coupling iteration: the plants driven by the replayed fluid
   // iterate the same windows the same number of times, to the same bits.
   const auto replay =

@@ -68,6 +68,18 @@ struct RunResult {
   std::vector<int> iterations;
   int64_t windows_at_max_iterations = 0;
   std::string acceleration;
+  // Every iteration's convergence measure, as preCICE's convergence log: each exchanged field's
+  // residual |H(x) - x| over its tolerance (<= 1: converged), fields named "drag of
+  // vegetation_beam" in `convergence_fields`' order. summary.json's neighbour
+  // implicit_convergence.csv holds it.
+  struct IterationMeasure {
+    int64_t window = 0;
+    double time = 0.0;  // window start [s]
+    int32_t iteration = 0;
+    std::vector<double> ratios;
+  };
+  std::vector<std::string> convergence_fields;
+  std::vector<IterationMeasure> convergence;
 };
 
 class Coupler {
