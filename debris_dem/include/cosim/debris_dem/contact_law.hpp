@@ -72,9 +72,10 @@ double damping_ratio_for_restitution(double e, bool clipped);
 // adding the dashpots). The dashpot's impulse c [delta] vanishes over a whole unclipped contact,
 // so either way the friction impulse of a sliding impact is mu times its normal impulse, as in
 // the rigid-body closed forms (references/dem_contact.md), and friction never pushes.
-// Inline: the contact loop calls it for every touching pair of every step, on its compact pair
-// state (no ContactPair is assembled there).
-inline Eigen::Vector3d contact_force(const PairConstants& c, double overlap,
+// Forced inline: the contact loop calls it for every touching pair of every step, on its compact
+// pair state (no ContactPair is assembled there); GCC 12 otherwise calls it and spills the pair's
+// vectors around the call.
+[[gnu::always_inline]] inline Eigen::Vector3d contact_force(const PairConstants& c, double overlap,
                                      const Eigen::Vector3d& n,
                                      const Eigen::Vector3d& relative_velocity, double dt, bool clip,
                                      Eigen::Vector3d& tangential_spring) {
