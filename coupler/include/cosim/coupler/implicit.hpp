@@ -22,7 +22,7 @@ struct ConvergenceMeasure {
   bool converged = true;
   // Largest over the blocks of min(|r| / (relative |H|), rms(r) / absolute): <= 1 converged.
   double worst = 0.0;
-  std::string worst_field;  // "drag of vegetation_beam"
+  std::string worst_field;     // "drag of vegetation_beam"
   std::vector<double> ratios;  // each block's min(...) above, in block order (0 for an empty one)
 };
 

@@ -75,10 +75,10 @@ double damping_ratio_for_restitution(double e, bool clipped);
 // Forced inline: the contact loop calls it for every touching pair of every step, on its compact
 // pair state (no ContactPair is assembled there); GCC 12 otherwise calls it and spills the pair's
 // vectors around the call.
-[[gnu::always_inline]] inline Eigen::Vector3d contact_force(const PairConstants& c, double overlap,
-                                     const Eigen::Vector3d& n,
-                                     const Eigen::Vector3d& relative_velocity, double dt, bool clip,
-                                     Eigen::Vector3d& tangential_spring) {
+[[gnu::always_inline]] inline Eigen::Vector3d contact_force(
+    const PairConstants& c, double overlap, const Eigen::Vector3d& n,
+    const Eigen::Vector3d& relative_velocity, double dt, bool clip,
+    Eigen::Vector3d& tangential_spring) {
   // Normal: P_n = K_n delta_n plus the dashpot; approach (v.n < 0) compresses.
   const double normal_velocity = relative_velocity.dot(n);
   double normal_force = c.normal_stiffness * overlap - c.normal_damping * normal_velocity;

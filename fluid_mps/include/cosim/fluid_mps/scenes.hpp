@@ -91,8 +91,8 @@ double mean_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point,
 // is carried hydrostatically to the point, p_j + rho g . (point - x_j), and averaged (0 if none):
 // the particles' pressures measured against the hydrostatic field at their own positions. Unlike
 // the plain mean it does not read rho g times the offset of the sample's centroid from the point,
-// which on a lattice that stays put (the same 10-20 particles every step, their centroid up to
-// 0.2 l0 off the point) does not average out in time. Exact for any hydrostatic field.
+// which on a lattice that stays put (the same 10-20 particles every step, their centroid a
+// fraction of l0 off the point) does not average out in time. Exact for any hydrostatic field.
 double hydrostatic_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point,
                                double radius);
 
