@@ -66,11 +66,10 @@ std::vector<Eigen::Vector3d> plate_pressure_loads(const FluidSystem& system,
       const double side = offset.dot(normal);
       if (side == 0.0) continue;
       const int s = side > 0.0 ? 0 : 1;
-      // The particle's pressure carried hydrostatically to the node's height (Adami, Hu & Adams
-      // 2012, J. Comput. Phys. 231, eq. (27), the wall's own acceleration left out): else the
-      // two sides' particles, a layer l0 thick each, would give a plate without volume the
-      // buoyancy of a slab 2 radius thick.
-      sum[s] += p[i] - rho * gravity.dot(offset);
+      // The particle's pressure carried hydrostatically to the node: else the two sides'
+      // particles, a layer l0 thick each, would give a plate without volume the buoyancy of a
+      // slab 2 radius thick.
+      sum[s] += carried_hydrostatically(p[i], -offset, rho, gravity);
       ++found[s];
     }
     const double plus = found[0] > 0 ? sum[0] / found[0] : 0.0;  // no water: p = 0

@@ -95,33 +95,39 @@ double residual_column_height(const FluidSystem& system, double wall_x, double b
   return height + 0.5 * l0;
 }
 
-double mean_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point, double radius) {
+namespace {
+
+// The mean of value(i, x_i - point) over the fluid particles within `radius` of `point`
+// (0 if none).
+template <class Value>
+double mean_over_fluid_near(const FluidSystem& system, const Eigen::Vector3d& point, double radius,
+                            Value value) {
   double sum = 0.0;
   int count = 0;
   for (int i = 0; i < system.particle_count(); ++i) {
     if (system.kinds()[i] != ParticleKind::fluid) continue;
-    if ((system.positions()[i] - point).norm() < radius) {
-      sum += system.pressures()[i];
+    const Eigen::Vector3d offset = system.positions()[i] - point;
+    if (offset.norm() < radius) {
+      sum += value(i, offset);
       ++count;
     }
   }
   return count > 0 ? sum / count : 0.0;
 }
 
+}  // namespace
+
+double mean_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point, double radius) {
+  return mean_over_fluid_near(system, point, radius,
+                              [&](int i, const Eigen::Vector3d&) { return system.pressures()[i]; });
+}
+
 double hydrostatic_pressure_at(const FluidSystem& system, const Eigen::Vector3d& point,
                                double radius) {
   const MpsParameters& p = system.parameters();
-  double sum = 0.0;
-  int count = 0;
-  for (int i = 0; i < system.particle_count(); ++i) {
-    if (system.kinds()[i] != ParticleKind::fluid) continue;
-    const Eigen::Vector3d offset = point - system.positions()[i];
-    if (offset.norm() < radius) {
-      sum += system.pressures()[i] + p.density * p.gravity.dot(offset);
-      ++count;
-    }
-  }
-  return count > 0 ? sum / count : 0.0;
+  return mean_over_fluid_near(system, point, radius, [&](int i, const Eigen::Vector3d& offset) {
+    return carried_hydrostatically(system.pressures()[i], -offset, p.density, p.gravity);
+  });
 }
 
 }  // namespace cosim::mps

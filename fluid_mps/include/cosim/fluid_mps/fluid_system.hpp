@@ -253,6 +253,15 @@ class FluidSystem {
   LatticeSums hierarchy_sums_;
 };
 
+// A particle's pressure carried hydrostatically over `to_point` (from the particle to the point
+// it is read at): pressure + rho g . to_point (Adami, Hu & Adams 2012, J. Comput. Phys. 231,
+// eq. (27), a wall's own acceleration left out). Probes and plate loads read the water's pressure
+// at a point this way, so that where their particles sit around the point does not count.
+inline double carried_hydrostatically(double pressure, const Eigen::Vector3d& to_point,
+                                      double density, const Eigen::Vector3d& gravity) {
+  return pressure + density * gravity.dot(to_point);
+}
+
 // Pressure load [N per m of span] on each node of a plate of no thickness along the polyline
 // `nodes` (2D, the library's plane): the mean pressure of the fluid particles within `radius` of
 // the node on its minus side minus that on its plus side (each particle's pressure carried
