@@ -7,6 +7,7 @@
 
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
+#include "cosim/fluid_mps/hydrostatic_background.hpp"
 #include "cosim/fluid_mps/operators.hpp"
 #include "cosim/fluid_mps/pressure_gradient.hpp"
 
@@ -78,6 +79,9 @@ StepReport FluidSystem::step(double dt) {
   predict(c, report);
   collide(c, report);
   measure_density(c, report);
+  if (p.pressure_background == MpsParameters::PressureBackground::hydrostatic) {
+    measure_background();
+  }
   assemble_pressure_equation(c);
   solve_pressure(report);
   correct_with_pressure_gradient(c, report);
@@ -270,6 +274,24 @@ void FluidSystem::update_phi() {
   for (int k = 0; k < n; ++k) phi_[k] = solid_fraction_[order_[k]];
 }
 
+// 3b. Hydrostatic background at r* (pressure_background: hydrostatic; hydrostatic_background.hpp),
+// faded in over the gradient radius below the surface: there the operator keeps carrying the
+// surface particles' weight, as without the background (docs/validation.md: with no fade-in the
+// top particles float on the background and still water reads 14 % low 5 cm down).
+void FluidSystem::measure_background() {
+  const MpsParameters& p = parameters_;
+  BackgroundInput b;
+  b.dimension = p.dimension;
+  b.gravity = p.gravity;
+  b.density = p.density;
+  b.particle_spacing = p.particle_spacing;
+  b.taper_depth = p.radius_gradient_over_l0 * p.particle_spacing;
+  b.positions = &position_star_;
+  b.kinds = &kind_;
+  b.periodic = &p.periodic;
+  hydrostatic_background(b, background_pressure_, background_gradient_);
+}
+
 // 4. Pressure Poisson equation with the Laplacian model (seed 001 eq. (9)):
 //    <lap p>_i - rho alpha p_i / dt^2 = -gamma rho / dt^2 (n*_i - n0) / n0,
 // multiplied by -lambda n0 / (2d) so the matrix is symmetric positive definite:
@@ -393,6 +415,14 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
   in.unknown = &unknown_;
   in.surface_threshold = p.surface_threshold;
   in.solid_fraction = &phi_;
+  const bool background = p.pressure_background == MpsParameters::PressureBackground::hydrostatic;
+  if (background) {
+    // The operator carries q = p - p_b (measure_background); grad p_b is added back exactly below.
+    dynamic_pressure_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+    for (int i = 0; i < n; ++i) dynamic_pressure_[i] = pressure_[i] - background_pressure_[i];
+    in.pressure = &dynamic_pressure_;
+  }
   pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
@@ -401,6 +431,9 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     const double local_factor = factor / (1.0 - phi_[i]);
     pressure_change_[i] = -local_factor * pressure_change_[i];
     wall_pressure_change_[i] = -local_factor * wall_pressure_change_[i];
+    // The background's own gradient is exact: no neighbourhood to normalise. It is booked with
+    // the fluid's pressure, not the walls' (it is the water column's weight).
+    if (background) pressure_change_[i] -= c.dt / p.density * background_gradient_[i];
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {

@@ -171,6 +171,7 @@ class FluidSystem {
   void predict(const StepConstants& c, StepReport& report);
   void collide(const StepConstants& c, StepReport& report);
   void measure_density(const StepConstants& c, StepReport& report);
+  void measure_background();
   void assemble_pressure_equation(const StepConstants& c);
   void assemble_laplacian_rows(double radius, double diagonal_shift, SparseRows& matrix);
   void solve_pressure(StepReport& report);
@@ -245,8 +246,9 @@ class FluidSystem {
   PressureSolver pressure_solver_;
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
   std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,
-      wall_correction_, pressure_change_, wall_pressure_change_;
-  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_;
+      wall_correction_, pressure_change_, wall_pressure_change_, background_gradient_;
+  std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_,
+      background_pressure_, dynamic_pressure_;
   std::vector<int> collided_, unknown_, unknown_particle_;
   std::vector<std::int64_t> row_length_;
   SparseRows matrix_, hierarchy_matrix_;

@@ -176,6 +176,14 @@ struct MpsParameters {
     corrected_split
   };
   GradientForm gradient_form = GradientForm::minimum;
+  // What the gradient operator carries (hydrostatic_background.hpp):
+  //  none:        the whole pressure p.
+  //  hydrostatic: q = p - p_b, with p_b = rho |g| (eta - h) of the local water column (faded in
+  //               over the gradient radius below the surface, off on steep surfaces) added back
+  //               by its exact gradient, so the operator's error scales with q, not with the
+  //               hydrostatic pressure.
+  enum class PressureBackground { none, hydrostatic };
+  PressureBackground pressure_background = PressureBackground::none;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
   // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
   double shifting_coefficient = 0.0;
@@ -208,6 +216,9 @@ inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 4> kPr
      {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky}}};
 inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
     {{"mixed", MpsParameters::SourceTerm::mixed}, {"density", MpsParameters::SourceTerm::density}}};
+inline constexpr scenario::Choices<MpsParameters::PressureBackground, 2> kPressureBackgrounds{
+    {{"none", MpsParameters::PressureBackground::none},
+     {"hydrostatic", MpsParameters::PressureBackground::hydrostatic}}};
 inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForms{
     {{"minimum", MpsParameters::GradientForm::minimum},
      {"symmetric", MpsParameters::GradientForm::symmetric},
@@ -281,6 +292,10 @@ void visit_parameters(P& p, V& v) {
              "corrected_blended (correction matrix blended by how full the neighbourhood is) or "
              "corrected_split (the blend on the Taylor part only, p^_i's repulsion uncorrected)"),
     p.gradient_form, kGradientForms);
+  v(Key("pressure_background")
+        .doc("none, or hydrostatic: the gradient operator carries p - rho g (eta - h) of the "
+             "local water column, whose exact gradient is added back"),
+    p.pressure_background, kPressureBackgrounds);
   v(Key("shifting_coefficient")
         .in(Range::between(0.0, 10.0))
         .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),

@@ -1,0 +1,45 @@
+// Hydrostatic background of the pressure gradient (issue 16). The particle gradient operators
+// (pressure_gradient.hpp) err in proportion to how much the pressure varies within their radius;
+// in slow free-surface flows most of that variation is hydrostatic (rho g = 9.8 kPa/m, hundreds
+// of times the streamwise drive of a river reach), and the minimum form's non-conservation of
+// that part is what leaves the rigid-canopy momentum balance open. Splitting p = p_b + q with a
+// smooth background p_b whose gradient is known exactly, the particle operator sees only q and
+// the background's gradient is added analytically: grad p = grad p_b(x_i) + <grad q>_i. The
+// split is exact in the continuum; it changes only which part the discrete operator carries.
+//
+// p_b = rho |g_up| S(x_t) f(eta(x_t) - h), h the height along -g's dominant axis, eta the free
+// surface above x_t: half a spacing above the highest fluid particle of each column bin (width
+// l0; water_level() reads the surface the same way), averaged over the non-empty bins within two
+// bins either way and interpolated (bi)linearly between bin centres. f fades the background in
+// over the depth delta below the surface (f = d^2 / (2 delta) above delta, d - delta / 2 below,
+// so f' = min(d / delta, 1)): in that layer the operator still carries the particles' weight, as
+// without a background. S is the trust in the column: 1 where the raw heights of the smoothing
+// window span at most delta, 0 from 2 delta on (a steep face, a surge front, a jet over air: the
+// column height says little of the pressure there), a smoothstep between, interpolated as eta.
+// Bins farther than two from any water have no background. Periodic channels wrap the bins
+// (with the period's drop). grad p_b is the exact gradient of this field.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "cosim/fluid_mps/parameters.hpp"
+
+namespace cosim::mps {
+
+struct BackgroundInput {
+  int dimension = 2;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // [m/s^2]
+  double density = 1000.0;                            // [kg/m^3]
+  double particle_spacing = 0.0;                      // l0 [m]: the column bin width
+  double taper_depth = 0.0;  // delta [m]; 0: no fade-in, S = 1 (the step passes r_e of the gradient)
+  const std::vector<Eigen::Vector3d>* positions = nullptr;
+  const std::vector<ParticleKind>* kinds = nullptr;
+  const PeriodicBoundary* periodic = nullptr;  // nullptr: none
+};
+
+// p_b [Pa] and grad p_b [Pa/m] at every fluid and wall particle (zero at the others).
+void hydrostatic_background(const BackgroundInput& in, std::vector<double>& pressure,
+                            std::vector<Eigen::Vector3d>& gradient);
+
+}  // namespace cosim::mps

@@ -1,0 +1,232 @@
+// Hydrostatic background of the pressure gradient (issue 16); see the header for the model.
+#include "cosim/fluid_mps/hydrostatic_background.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace cosim::mps {
+namespace {
+
+constexpr int kSmoothingBins = 2;  // eta is averaged over the bins within this many either way
+
+bool carries_pressure(ParticleKind kind) {
+  return kind == ParticleKind::fluid || kind == ParticleKind::wall;
+}
+
+// Column bins over the horizontal axes (one in 2D, two in 3D) and the surface height of each.
+class SurfaceHeights {
+ public:
+  explicit SurfaceHeights(const BackgroundInput& in) : in_(in) {
+    const Eigen::Vector3d& g = in.gravity;
+    for (int k = 1; k < in.dimension; ++k) {
+      if (std::abs(g[k]) > std::abs(g[up_])) up_ = k;
+    }
+    g_up_ = std::abs(g[up_]);
+    sign_ = g[up_] < 0.0 ? 1.0 : -1.0;
+    int next = 0;
+    for (int k = 0; k < in.dimension; ++k) {
+      if (k != up_) axis_[next++] = k;
+    }
+    const auto& x = *in.positions;
+    const auto& kinds = *in.kinds;
+    periodic_ = in.periodic && in.periodic->enabled && axis_[0] == 0;
+    for (int a = 0; a < in.dimension - 1; ++a) {
+      double low = std::numeric_limits<double>::infinity(), high = -low;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        if (!carries_pressure(kinds[i])) continue;
+        low = std::min(low, x[i][axis_[a]]);
+        high = std::max(high, x[i][axis_[a]]);
+      }
+      if (a == 0 && periodic_) {
+        origin_[0] = in.periodic->x_min;
+        bins_[0] =
+            std::max(1, static_cast<int>(std::lround(in.periodic->length() / in.particle_spacing)));
+        width_[0] = in.periodic->length() / bins_[0];
+      } else if (low <= high) {
+        origin_[a] = low - 0.5 * in.particle_spacing;
+        width_[a] = in.particle_spacing;
+        bins_[a] = static_cast<int>(std::floor((high - origin_[a]) / width_[a])) + 1;
+      }
+    }
+    // Period's drop: the copy one period downstream lies lower by `drop` along y.
+    if (periodic_ && up_ == 1) drop_ = sign_ * in.periodic->drop;
+    // The free surface of each bin: half a spacing above its top fluid particle (as
+    // water_level() reads it).
+    const double half_spacing = 0.5 * in.particle_spacing;
+    std::vector<double> surface(static_cast<std::size_t>(bins_[0]) * bins_[1], kEmpty);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (!is_fluid(kinds[i])) continue;
+      double& top = surface[bin_of(x[i])];
+      top = std::max(top, height(x[i]) + half_spacing);
+    }
+    smooth(surface);
+  }
+
+  // p_b and its gradient at x.
+  void background(const Eigen::Vector3d& x, double& pressure, Eigen::Vector3d& gradient) const {
+    pressure = 0.0;
+    gradient.setZero();
+    double eta = 0.0, trust = 0.0;
+    std::array<double, 2> eta_slope{0.0, 0.0}, trust_slope{0.0, 0.0};
+    if (!interpolate(smoothed_, true, x, eta, eta_slope)) return;
+    interpolate(trust_, false, x, trust, trust_slope);
+    const double depth = eta - height(x);
+    if (depth <= 0.0 || trust <= 0.0) return;
+    // Tapered over the surface layer: f(d) = d^2 / (2 delta) below delta, d - delta / 2 deeper
+    // (continuous with its slope f' = min(d / delta, 1)); times the trust S of the column.
+    const double delta = in_.taper_depth;
+    const double rho_g = in_.density * g_up_;
+    const double f = depth < delta ? 0.5 * depth * depth / delta : depth - 0.5 * delta;
+    const double df = depth < delta ? depth / delta : 1.0;
+    pressure = rho_g * trust * f;
+    for (int a = 0; a < in_.dimension - 1; ++a) {
+      gradient[axis_[a]] = rho_g * (f * trust_slope[a] + trust * df * eta_slope[a]);
+    }
+    gradient[up_] = -rho_g * trust * df * sign_;
+  }
+
+ private:
+  static constexpr double kEmpty = -std::numeric_limits<double>::infinity();
+
+  // eta of each bin: the mean surface over the non-empty bins of its window (two bins either
+  // way); S: the trust in it (see trust()).
+  void smooth(const std::vector<double>& surface) {
+    smoothed_.assign(surface.size(), kEmpty);
+    trust_.assign(surface.size(), kEmpty);
+    const int reach1 = in_.dimension == 3 ? kSmoothingBins : 0;
+    for (int b1 = 0; b1 < bins_[1]; ++b1) {
+      for (int b0 = 0; b0 < bins_[0]; ++b0) {
+        double sum = 0.0, lowest = -kEmpty, highest = kEmpty;
+        int count = 0;
+        for (int k1 = -reach1; k1 <= reach1; ++k1) {
+          for (int k0 = -kSmoothingBins; k0 <= kSmoothingBins; ++k0) {
+            const double h = lookup(surface, b0 + k0, b1 + k1);
+            if (h == kEmpty) continue;
+            sum += h;
+            ++count;
+            lowest = std::min(lowest, h);
+            highest = std::max(highest, h);
+          }
+        }
+        if (count == 0) continue;
+        smoothed_[index(b0, b1)] = sum / count;
+        trust_[index(b0, b1)] = trust(lowest, highest);
+      }
+    }
+  }
+
+  double height(const Eigen::Vector3d& x) const { return sign_ * x[up_]; }
+  // S of a bin: 1 where the surface heights of the smoothing window span at most delta (a
+  // gently sloping surface, nearly hydrostatic water), 0 from 2 delta on (a steep face, a
+  // surge front or a jet over air, where the column height says little of the pressure), a
+  // smoothstep between. With no taper depth, 1.
+  double trust(double lowest, double highest) const {
+    const double delta = in_.taper_depth;
+    if (!(delta > 0.0)) return 1.0;
+    const double t = std::clamp((2.0 * delta - (highest - lowest)) / delta, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+  }
+  std::size_t index(int b0, int b1) const {
+    return static_cast<std::size_t>(b1) * bins_[0] + static_cast<std::size_t>(b0);
+  }
+  std::size_t bin_of(const Eigen::Vector3d& x) const {
+    std::array<int, 2> b{0, 0};
+    for (int a = 0; a < in_.dimension - 1; ++a) {
+      const double coordinate = a == 0 && periodic_ ? in_.periodic->fold(x[axis_[a]]) : x[axis_[a]];
+      b[a] = std::clamp(static_cast<int>(std::floor((coordinate - origin_[a]) / width_[a])), 0,
+                        bins_[a] - 1);
+    }
+    return index(b[0], b[1]);
+  }
+  // (Bi)linear interpolation of bin values between the bin centres, with its slope; where a
+  // corner is empty, the mean of the others with no slope. False where all are empty.
+  bool interpolate(const std::vector<double>& values, bool shifted, const Eigen::Vector3d& x,
+                   double& value, std::array<double, 2>& slope) const {
+    std::array<int, 2> cell{0, 0};
+    std::array<double, 2> f{0.0, 0.0};
+    for (int a = 0; a < in_.dimension - 1; ++a) {
+      const double u = (x[axis_[a]] - origin_[a]) / width_[a] - 0.5;
+      cell[a] = static_cast<int>(std::floor(u));
+      f[a] = u - cell[a];
+    }
+    const int corners1 = in_.dimension == 3 ? 2 : 1;
+    std::array<double, 4> node{kEmpty, kEmpty, kEmpty, kEmpty};
+    double sum = 0.0;
+    int defined = 0;
+    for (int c1 = 0; c1 < corners1; ++c1) {
+      for (int c0 = 0; c0 < 2; ++c0) {
+        const double v = lookup(values, cell[0] + c0, cell[1] + c1, shifted);
+        node[2 * c1 + c0] = v;
+        if (v != kEmpty) {
+          sum += v;
+          ++defined;
+        }
+      }
+    }
+    slope = {0.0, 0.0};
+    if (defined == 0) return false;
+    value = sum / defined;
+    if (defined < 2 * corners1) return true;
+    if (in_.dimension == 2) {
+      value = (1.0 - f[0]) * node[0] + f[0] * node[1];
+      slope[0] = (node[1] - node[0]) / width_[0];
+    } else {
+      const double e0 = (1.0 - f[0]) * node[0] + f[0] * node[1];
+      const double e1 = (1.0 - f[0]) * node[2] + f[0] * node[3];
+      value = (1.0 - f[1]) * e0 + f[1] * e1;
+      slope[0] = ((1.0 - f[1]) * (node[1] - node[0]) + f[1] * (node[3] - node[2])) / width_[0];
+      slope[1] = (e1 - e0) / width_[1];
+    }
+    return true;
+  }
+  // The value of bin (b0, b1), wrapped along a periodic axis 0 (a height `shifted` by the drop
+  // per period); kEmpty outside the bins.
+  double lookup(const std::vector<double>& values, int b0, int b1, bool shifted = true) const {
+    if (b1 < 0 || b1 >= bins_[1]) return kEmpty;
+    double shift = 0.0;
+    if (periodic_) {
+      while (b0 < 0) {
+        b0 += bins_[0];
+        shift += drop_;  // one period upstream: higher
+      }
+      while (b0 >= bins_[0]) {
+        b0 -= bins_[0];
+        shift -= drop_;
+      }
+    } else if (b0 < 0 || b0 >= bins_[0]) {
+      return kEmpty;
+    }
+    const double v = values[index(b0, b1)];
+    return v == kEmpty ? kEmpty : v + (shifted ? shift : 0.0);
+  }
+
+  const BackgroundInput& in_;
+  int up_ = 0;
+  double g_up_ = 0.0, sign_ = 1.0, drop_ = 0.0;
+  std::array<int, 2> axis_{0, 0};
+  bool periodic_ = false;
+  std::array<double, 2> origin_{0.0, 0.0}, width_{1.0, 1.0};
+  std::array<int, 2> bins_{1, 1};
+  std::vector<double> smoothed_, trust_;
+};
+
+}  // namespace
+
+void hydrostatic_background(const BackgroundInput& in, std::vector<double>& pressure,
+                            std::vector<Eigen::Vector3d>& gradient) {
+  const auto& kinds = *in.kinds;
+  const int n = static_cast<int>(kinds.size());
+  pressure.assign(n, 0.0);
+  gradient.assign(n, Eigen::Vector3d::Zero());
+  if (n == 0 || in.gravity.squaredNorm() == 0.0) return;
+  const SurfaceHeights surface(in);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (carries_pressure(kinds[i]))
+      surface.background((*in.positions)[i], pressure[i], gradient[i]);
+  }
+}
+
+}  // namespace cosim::mps

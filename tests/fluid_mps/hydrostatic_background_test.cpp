@@ -1,0 +1,205 @@
+// Unit tests of the hydrostatic background of the pressure gradient
+// (hydrostatic_background.hpp, issue 16): the background of a flat layer, of a sloping surface
+// in 2D and 3D, across a periodic seam with a drop, and nothing far from the water.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cosim/fluid_mps/hydrostatic_background.hpp"
+
+using namespace cosim::mps;
+
+namespace {
+
+constexpr double kRho = 1000.0, kG = 9.81, kL0 = 0.01;
+constexpr double kHalf = 0.5 * kL0;  // the surface lies half a spacing above the top particles
+
+// Columns of fluid particles whose top particle sits at eta(x, z) exactly, `rows` deep, over
+// two rows of wall and one of dummies (2D: one layer in z).
+struct Layer {
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<ParticleKind> kinds;
+  PeriodicBoundary periodic;
+  BackgroundInput input(int dimension) const {
+    BackgroundInput in;
+    in.dimension = dimension;
+    in.gravity = dimension == 3 ? Eigen::Vector3d(0, 0, -kG) : Eigen::Vector3d(0, -kG, 0);
+    in.density = kRho;
+    in.particle_spacing = kL0;
+    in.positions = &positions;
+    in.kinds = &kinds;
+    in.periodic = &periodic;
+    return in;
+  }
+};
+
+template <class Surface>
+Layer layer(int dimension, int columns, int rows, Surface&& eta) {
+  Layer l;
+  const int layers = dimension == 3 ? columns : 1;
+  const int up = dimension == 3 ? 2 : 1;
+  for (int c1 = 0; c1 < layers; ++c1) {
+    for (int c0 = 0; c0 < columns; ++c0) {
+      Eigen::Vector3d base = Eigen::Vector3d::Zero();
+      base.x() = (c0 + 0.5) * kL0;
+      if (dimension == 3) base.y() = (c1 + 0.5) * kL0;
+      const double top = eta(base.x(), base.y());
+      for (int r = -3; r < rows; ++r) {
+        Eigen::Vector3d x = base;
+        x[up] = r < 0 ? (r + 0.5) * kL0 : top - (rows - 1 - r) * kL0;
+        l.positions.push_back(x);
+        l.kinds.push_back(r < -2  ? ParticleKind::dummy
+                          : r < 0 ? ParticleKind::wall
+                                  : ParticleKind::fluid);
+      }
+    }
+  }
+  return l;
+}
+
+}  // namespace
+
+TEST(MpsHydrostaticBackground, FlatLayerIsHydrostaticBelowTheTopParticles) {
+  const Layer l = layer(2, 20, 10, [](double, double) { return 0.1; });
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] == ParticleKind::dummy) {
+      EXPECT_EQ(p[i], 0.0);
+      EXPECT_EQ(g[i].norm(), 0.0);
+      continue;
+    }
+    const double depth = 0.1 + kHalf - l.positions[i].y();
+    EXPECT_NEAR(p[i], depth > 0.0 ? kRho * kG * depth : 0.0, 1e-9) << i;
+    if (depth > 0.0) {
+      EXPECT_NEAR(g[i].x(), 0.0, 1e-9);
+      EXPECT_NEAR(g[i].y(), -kRho * kG, 1e-9);
+    }
+  }
+}
+
+TEST(MpsHydrostaticBackground, SlopingSurfaceGivesItsSlopeInTheInterior) {
+  const double slope = 0.05;
+  auto eta = [&](double x, double) { return 0.1 - slope * x; };
+  const Layer l = layer(2, 30, 8, eta);
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  int checked = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    const Eigen::Vector3d& x = l.positions[i];
+    // Two bins of smoothing, and half a bin of interpolation, from either end.
+    if (l.kinds[i] != ParticleKind::fluid || x.x() < 3.0 * kL0 || x.x() > 27.0 * kL0) continue;
+    EXPECT_NEAR(p[i], kRho * kG * (eta(x.x(), 0.0) + kHalf - x.y()), 1e-6) << i;
+    EXPECT_NEAR(g[i].x(), -kRho * kG * slope, 1e-6) << i;
+    EXPECT_NEAR(g[i].y(), -kRho * kG, 1e-9) << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(MpsHydrostaticBackground, PeriodicSeamKeepsTheSlopeOfADroppingChannel) {
+  const int columns = 20;
+  const double length = columns * kL0, drop = 0.004;
+  auto eta = [&](double x, double) { return 0.1 - drop * x / length; };
+  Layer l = layer(2, columns, 8, eta);
+  l.periodic.enabled = true;
+  l.periodic.x_min = 0.0;
+  l.periodic.x_max = length;
+  l.periodic.drop = drop;
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid ||
+        eta(l.positions[i].x(), 0.0) - l.positions[i].y() < 0.5 * kL0)
+      continue;
+    // Everywhere, the seam included: the bins wrap with the drop.
+    EXPECT_NEAR(g[i].x(), -kRho * kG * drop / length, 1e-6) << l.positions[i].x();
+    const double expected_eta =
+        l.positions[i].x() < 0.5 * kL0
+            ? eta(0.5 * kL0, 0.0) + (0.5 * kL0 - l.positions[i].x()) * drop / length
+            : eta(l.positions[i].x(), 0.0);
+    EXPECT_NEAR(p[i], kRho * kG * (expected_eta + kHalf - l.positions[i].y()), 1e-6);
+  }
+}
+
+TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
+  const double sx = 0.03, sy = -0.02;
+  auto eta = [&](double x, double y) { return 0.08 + sx * x + sy * y; };
+  const Layer l = layer(3, 12, 5, eta);
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(3), p, g);
+  int checked = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    const Eigen::Vector3d& x = l.positions[i];
+    const bool interior =
+        x.x() > 3.0 * kL0 && x.x() < 9.0 * kL0 && x.y() > 3.0 * kL0 && x.y() < 9.0 * kL0;
+    if (l.kinds[i] != ParticleKind::fluid || !interior) continue;
+    EXPECT_NEAR(p[i], kRho * kG * (eta(x.x(), x.y()) + kHalf - x.z()), 1e-6);
+    EXPECT_NEAR(g[i].x(), kRho * kG * sx, 1e-6);
+    EXPECT_NEAR(g[i].y(), kRho * kG * sy, 1e-6);
+    EXPECT_NEAR(g[i].z(), -kRho * kG, 1e-9);
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(MpsHydrostaticBackground, NoBackgroundFarFromTheWater) {
+  // Water over the first 10 columns only; the bed goes on for 20 more.
+  Layer l = layer(2, 30, 6, [](double, double) { return 0.05; });
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] == ParticleKind::fluid && l.positions[i].x() > 10.0 * kL0)
+      l.kinds[i] = ParticleKind::inactive;
+  }
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::wall) continue;
+    const double x = l.positions[i].x();
+    if (x < 10.0 * kL0) {
+      EXPECT_GT(p[i], 0.0);
+    } else if (x > 13.0 * kL0) {  // beyond two bins of smoothing and one of interpolation
+      EXPECT_EQ(p[i], 0.0) << x;
+      EXPECT_EQ(g[i].norm(), 0.0);
+    }
+  }
+}
+
+TEST(MpsHydrostaticBackground, FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces) {
+  // A deep block (eta = 0.2 m) over the first 15 columns, a layer 3 cm deep after it: a step of
+  // 17 cm, far more than 2 delta.
+  const double delta = 0.04;
+  Layer l = layer(2, 40, 18, [](double x, double) { return x < 0.15 ? 0.2 : 0.03; });
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] == ParticleKind::fluid && l.positions[i].y() < 0.0)
+      l.kinds[i] = ParticleKind::inactive;  // the layer's columns hold 4 particles, not 18
+  }
+  BackgroundInput in = l.input(2);
+  in.taper_depth = delta;
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(in, p, g);
+  int deep_block = 0, near_step = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& x = l.positions[i];
+    if (x.x() < 0.1) {  // gentle: S = 1, f faded in over delta
+      const double d = 0.2 + kHalf - x.y();
+      const double f = d < delta ? 0.5 * d * d / delta : d - 0.5 * delta;
+      EXPECT_NEAR(p[i], kRho * kG * f, 1e-6) << x.transpose();
+      EXPECT_NEAR(g[i].y(), -kRho * kG * std::min(d / delta, 1.0), 1e-6);
+      EXPECT_NEAR(g[i].x(), 0.0, 1e-6);
+      ++deep_block;
+    } else if (x.x() > 0.13 && x.x() < 0.17) {  // the step's window spans 17 cm: S = 0
+      EXPECT_EQ(p[i], 0.0) << x.transpose();
+      EXPECT_EQ(g[i].norm(), 0.0);
+      ++near_step;
+    }
+  }
+  EXPECT_GT(deep_block, 100);
+  EXPECT_GT(near_step, 20);
+}
