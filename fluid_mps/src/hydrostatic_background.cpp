@@ -95,19 +95,26 @@ class SurfaceHeights {
   void smooth(const std::vector<double>& surface) {
     smoothed_.assign(surface.size(), kEmpty);
     trust_.assign(surface.size(), kEmpty);
-    const int reach1 = in_.dimension == 3 ? kSmoothingBins : 0;
+    // S looks as far as the operator reaches from the window's edge: a brink or a nappe within
+    // r_e of the particles that use this bin's eta makes their water non-hydrostatic.
+    const int reach =
+        kSmoothingBins + (in_.taper_depth > 0.0
+                              ? static_cast<int>(std::ceil(in_.taper_depth / in_.particle_spacing))
+                              : 0);
+    const int reach1 = in_.dimension == 3 ? reach : 0;
     for (int b1 = 0; b1 < bins_[1]; ++b1) {
       for (int b0 = 0; b0 < bins_[0]; ++b0) {
         double sum = 0.0, lowest = -kEmpty, highest = kEmpty;
         int count = 0;
         for (int k1 = -reach1; k1 <= reach1; ++k1) {
-          for (int k0 = -kSmoothingBins; k0 <= kSmoothingBins; ++k0) {
+          for (int k0 = -reach; k0 <= reach; ++k0) {
             const double h = lookup(surface, b0 + k0, b1 + k1);
             if (h == kEmpty) continue;
-            sum += h;
-            ++count;
             lowest = std::min(lowest, h);
             highest = std::max(highest, h);
+            if (std::abs(k0) > kSmoothingBins || std::abs(k1) > kSmoothingBins) continue;
+            sum += h;
+            ++count;
           }
         }
         if (count == 0) continue;
@@ -118,9 +125,8 @@ class SurfaceHeights {
   }
 
   double height(const Eigen::Vector3d& x) const { return sign_ * x[up_]; }
-  // S of a bin: 1 where the surface heights of the smoothing window span at most delta (a
-  // gently sloping surface, nearly hydrostatic water), 0 from 2 delta on (a steep face, a
-  // surge front or a jet over air, where the column height says little of the pressure), a
+  // S of a bin from the lowest and highest surface within its trust window: 1 where they span
+  // at most delta (a gently sloping surface, nearly hydrostatic water), 0 from 2 delta on, a
   // smoothstep between. With no taper depth, 1.
   double trust(double lowest, double highest) const {
     const double delta = in_.taper_depth;

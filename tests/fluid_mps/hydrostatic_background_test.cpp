@@ -187,19 +187,20 @@ TEST(MpsHydrostaticBackground, FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = l.positions[i];
-    if (x.x() < 0.1) {  // gentle: S = 1, f faded in over delta
+    // S looks 2 + delta / l0 = 6 bins either way: the step is out of sight below x = 0.085 m.
+    if (x.x() < 0.08) {  // gentle: S = 1, f faded in over delta
       const double d = 0.2 + kHalf - x.y();
       const double f = d < delta ? 0.5 * d * d / delta : d - 0.5 * delta;
       EXPECT_NEAR(p[i], kRho * kG * f, 1e-6) << x.transpose();
       EXPECT_NEAR(g[i].y(), -kRho * kG * std::min(d / delta, 1.0), 1e-6);
       EXPECT_NEAR(g[i].x(), 0.0, 1e-6);
       ++deep_block;
-    } else if (x.x() > 0.13 && x.x() < 0.17) {  // the step's window spans 17 cm: S = 0
+    } else if (x.x() > 0.10 && x.x() < 0.20) {  // the window spans the step's 17 cm: S = 0
       EXPECT_EQ(p[i], 0.0) << x.transpose();
       EXPECT_EQ(g[i].norm(), 0.0);
       ++near_step;
     }
   }
   EXPECT_GT(deep_block, 100);
-  EXPECT_GT(near_step, 20);
+  EXPECT_GT(near_step, 40);
 }

@@ -13,9 +13,10 @@
 // bins either way and interpolated (bi)linearly between bin centres. f fades the background in
 // over the depth delta below the surface (f = d^2 / (2 delta) above delta, d - delta / 2 below,
 // so f' = min(d / delta, 1)): in that layer the operator still carries the particles' weight, as
-// without a background. S is the trust in the column: 1 where the raw heights of the smoothing
-// window span at most delta, 0 from 2 delta on (a steep face, a surge front, a jet over air: the
-// column height says little of the pressure there), a smoothstep between, interpolated as eta.
+// without a background. S is the trust in the column: 1 where the raw heights within reach of
+// the operator from the smoothing window (2 + delta / l0 bins either way) span at most delta, 0
+// from 2 delta on (a steep face, a surge front, a brink, a nappe, a jet over air: the column
+// height says little of the pressure there), a smoothstep between, interpolated as eta.
 // Bins farther than two from any water have no background. Periodic channels wrap the bins
 // (with the period's drop). grad p_b is the exact gradient of this field.
 #pragma once
