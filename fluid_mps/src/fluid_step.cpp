@@ -79,9 +79,6 @@ StepReport FluidSystem::step(double dt) {
   predict(c, report);
   collide(c, report);
   measure_density(c, report);
-  if (p.pressure_background == MpsParameters::PressureBackground::hydrostatic) {
-    measure_background();
-  }
   assemble_pressure_equation(c);
   solve_pressure(report);
   correct_with_pressure_gradient(c, report);
@@ -274,24 +271,6 @@ void FluidSystem::update_phi() {
   for (int k = 0; k < n; ++k) phi_[k] = solid_fraction_[order_[k]];
 }
 
-// 3b. Hydrostatic background at r* (pressure_background: hydrostatic; hydrostatic_background.hpp),
-// faded in over the gradient radius below the surface: there the operator keeps carrying the
-// surface particles' weight, as without the background (docs/validation.md: with no fade-in the
-// top particles float on the background and still water reads 14 % low 5 cm down).
-void FluidSystem::measure_background() {
-  const MpsParameters& p = parameters_;
-  BackgroundInput b;
-  b.dimension = p.dimension;
-  b.gravity = p.gravity;
-  b.density = p.density;
-  b.particle_spacing = p.particle_spacing;
-  b.taper_depth = p.radius_gradient_over_l0 * p.particle_spacing;
-  b.positions = &position_star_;
-  b.kinds = &kind_;
-  b.periodic = &p.periodic;
-  hydrostatic_background(b, background_pressure_, background_gradient_);
-}
-
 // 4. Pressure Poisson equation with the Laplacian model (seed 001 eq. (9)):
 //    <lap p>_i - rho alpha p_i / dt^2 = -gamma rho / dt^2 (n*_i - n0) / n0,
 // multiplied by -lambda n0 / (2d) so the matrix is symmetric positive definite:
@@ -394,6 +373,25 @@ void FluidSystem::solve_pressure(StepReport& report) {
   }
 }
 
+// Hydrostatic background at r* for the correction (pressure_background: hydrostatic;
+// hydrostatic_background.hpp), faded in over the gradient radius below the surface: there the
+// operator keeps carrying the surface particles' weight, as without the background
+// (docs/validation.md: with no fade-in the top particles float on the background and still water
+// reads 14 % low 5 cm down).
+void FluidSystem::measure_background() {
+  const MpsParameters& p = parameters_;
+  BackgroundInput b;
+  b.dimension = p.dimension;
+  b.gravity = p.gravity;
+  b.density = p.density;
+  b.particle_spacing = p.particle_spacing;
+  b.taper_depth = p.radius_gradient_over_l0 * p.particle_spacing;
+  b.positions = &position_star_;
+  b.kinds = &kind_;
+  b.periodic = &p.periodic;
+  hydrostatic_background(b, background_pressure_, background_gradient_);
+}
+
 // 5. Pressure gradient (seed 000 eq. (2), radius re_g) by MpsParameters::GradientForm
 // (pressure_gradient.cpp; by default the minimum form of Koshizuka-Oka, whose neighbour minimum
 // p^_i keeps the pair forces repulsive) on the pairs at r* (near_), and the correction
@@ -417,7 +415,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
   in.solid_fraction = &phi_;
   const bool background = p.pressure_background == MpsParameters::PressureBackground::hydrostatic;
   if (background) {
-    // The operator carries q = p - p_b (measure_background); grad p_b is added back exactly below.
+    // The operator carries q = p - p_b; grad p_b is added back exactly below.
+    measure_background();
     dynamic_pressure_.resize(n);
 #pragma omp parallel for schedule(static) if (n >= 4096)
     for (int i = 0; i < n; ++i) dynamic_pressure_[i] = pressure_[i] - background_pressure_[i];

@@ -11,10 +11,6 @@ namespace {
 
 constexpr int kSmoothingBins = 2;  // eta is averaged over the bins within this many either way
 
-bool carries_pressure(ParticleKind kind) {
-  return kind == ParticleKind::fluid || kind == ParticleKind::wall;
-}
-
 // Column bins over the horizontal axes (one in 2D, two in 3D) and the surface height of each.
 class SurfaceHeights {
  public:

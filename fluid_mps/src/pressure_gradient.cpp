@@ -15,10 +15,6 @@ namespace {
 
 using Form = MpsParameters::GradientForm;
 
-bool carries_pressure(ParticleKind kind) {
-  return kind == ParticleKind::fluid || kind == ParticleKind::wall;
-}
-
 // p^_i: the smallest pressure of i and its pressure-carrying neighbours within the radius
 // (Koshizuka & Oka 1996): subtracting it keeps every pair force repulsive.
 void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum) {

@@ -355,6 +355,11 @@ inline bool is_fluid(ParticleKind kind) {
 inline bool is_inactive(ParticleKind kind) {
   return kind == ParticleKind::inactive;
 }
+// Fluid and wall particles carry a pressure (an unknown of the Poisson equation or a free-surface
+// zero); dummies and inactive particles do not.
+inline bool carries_pressure(ParticleKind kind) {
+  return kind == ParticleKind::fluid || kind == ParticleKind::wall;
+}
 
 // Initial particles of a scene. Wall and dummy particles move with their (prescribed) velocity.
 struct ParticleSet {
