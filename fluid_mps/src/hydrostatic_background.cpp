@@ -10,6 +10,9 @@ namespace cosim::mps {
 namespace {
 
 constexpr int kSmoothingBins = 2;  // eta is averaged over the bins within this many either way
+// A vertical gap of more than this many l0 between the fluid particles of a bin is air (a column
+// bin of width l0 has a particle about every l0; an fcc lattice leaves gaps up to 1.6 l0).
+constexpr double kLayerGap = 3.0;
 
 // Column bins over the horizontal axes (one in 2D, two in 3D) and the surface height of each.
 class SurfaceHeights {
@@ -48,16 +51,7 @@ class SurfaceHeights {
     }
     // Period's drop: the copy one period downstream lies lower by `drop` along y.
     if (periodic_ && up_ == 1) drop_ = sign_ * in.periodic->drop;
-    // The free surface of each bin: half a spacing above its top fluid particle (as
-    // water_level() reads it).
-    const double half_spacing = 0.5 * in.particle_spacing;
-    std::vector<double> surface(static_cast<std::size_t>(bins_[0]) * bins_[1], kEmpty);
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      if (!is_fluid(kinds[i])) continue;
-      double& top = surface[bin_of(x[i])];
-      top = std::max(top, height(x[i]) + half_spacing);
-    }
-    smooth(surface);
+    smooth(surfaces());
   }
 
   // p_b and its gradient at x.
@@ -118,6 +112,40 @@ class SurfaceHeights {
         trust_[index(b0, b1)] = trust(lowest, highest);
       }
     }
+  }
+
+  // The free surface of each bin: half a spacing above the top particle of its lowest layer of
+  // water (as water_level() reads it), the layer ending at the first gap of more than
+  // kLayerGap l0 between heights. Water above such a gap (a nappe over the pool it falls into,
+  // a jet, a splash) is not the column's: it is not held up by the water below.
+  std::vector<double> surfaces() const {
+    const auto& x = *in_.positions;
+    const auto& kinds = *in_.kinds;
+    const std::size_t bin_count = static_cast<std::size_t>(bins_[0]) * bins_[1];
+    std::vector<std::size_t> start(bin_count + 1, 0), bin(x.size(), 0);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (!is_fluid(kinds[i])) continue;
+      bin[i] = bin_of(x[i]);
+      ++start[bin[i] + 1];
+    }
+    for (std::size_t b = 0; b < bin_count; ++b) start[b + 1] += start[b];
+    std::vector<double> heights(start.back());
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (is_fluid(kinds[i])) heights[next[bin[i]]++] = height(x[i]);
+    }
+    const double gap = kLayerGap * in_.particle_spacing;
+    std::vector<double> surface(bin_count, kEmpty);
+    for (std::size_t b = 0; b < bin_count; ++b) {
+      if (start[b] == start[b + 1]) continue;
+      const auto first = heights.begin() + static_cast<std::ptrdiff_t>(start[b]);
+      const auto last = heights.begin() + static_cast<std::ptrdiff_t>(start[b + 1]);
+      std::sort(first, last);
+      auto top = first;
+      while (top + 1 != last && *(top + 1) - *top <= gap) ++top;
+      surface[b] = *top + 0.5 * in_.particle_spacing;
+    }
+    return surface;
   }
 
   double height(const Eigen::Vector3d& x) const { return sign_ * x[up_]; }

@@ -1,6 +1,7 @@
 // Unit tests of the hydrostatic background of the pressure gradient
 // (hydrostatic_background.hpp, issue 16): the background of a flat layer, of a sloping surface
-// in 2D and 3D, across a periodic seam with a drop, and nothing far from the water.
+// in 2D and 3D, across a periodic seam with a drop, nothing far from the water, and none in a jet
+// over air.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -201,4 +202,36 @@ TEST(MpsHydrostaticBackground, FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces
   }
   EXPECT_GT(deep_block, 100);
   EXPECT_GT(near_step, 40);
+}
+
+TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
+  // A pool 5 cm deep, and a jet 3 cm thick flying 5 cm above it over columns 8-15 (a nappe over
+  // the pool it falls into): the pool's background is that of its own surface, the jet has none.
+  const double pool = 0.05;
+  Layer l = layer(2, 24, 6, [&](double, double) { return pool; });
+  for (int c = 8; c < 16; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      l.positions.emplace_back((c + 0.5) * kL0, pool + 0.06 + r * kL0, 0.0);
+      l.kinds.push_back(ParticleKind::fluid);
+    }
+  }
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  int pool_checked = 0, jet_checked = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& x = l.positions[i];
+    if (x.y() < pool + kHalf) {
+      EXPECT_NEAR(p[i], kRho * kG * (pool + kHalf - x.y()), 1e-9) << x.transpose();
+      EXPECT_NEAR(g[i].x(), 0.0, 1e-9) << x.transpose();
+      ++pool_checked;
+    } else {
+      EXPECT_EQ(p[i], 0.0) << x.transpose();
+      EXPECT_EQ(g[i].norm(), 0.0) << x.transpose();
+      ++jet_checked;
+    }
+  }
+  EXPECT_EQ(pool_checked, 24 * 6);
+  EXPECT_EQ(jet_checked, 8 * 3);
 }

@@ -8,8 +8,10 @@
 // split is exact in the continuum; it changes only which part the discrete operator carries.
 //
 // p_b = rho |g_up| S(x_t) f(eta(x_t) - h), h the height along -g's dominant axis, eta the free
-// surface above x_t: half a spacing above the highest fluid particle of each column bin (width
-// l0; water_level() reads the surface the same way), averaged over the non-empty bins within two
+// surface above x_t: half a spacing above the top particle of the lowest layer of water in each
+// column bin (width l0; water_level() reads the surface the same way; a layer ends at a gap of
+// more than 3 l0, so a nappe, jet or splash over air is not part of the column below it and has
+// no background of its own), averaged over the non-empty bins within two
 // bins either way and interpolated (bi)linearly between bin centres. f fades the background in
 // over the depth delta below the surface (f = d^2 / (2 delta) above delta, d - delta / 2 below,
 // so f' = min(d / delta, 1)): in that layer the operator still carries the particles' weight, as
@@ -33,7 +35,8 @@ struct BackgroundInput {
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // [m/s^2]
   double density = 1000.0;                            // [kg/m^3]
   double particle_spacing = 0.0;                      // l0 [m]: the column bin width
-  double taper_depth = 0.0;  // delta [m]; 0: no fade-in, S = 1 (the step passes r_e of the gradient)
+  double taper_depth =
+      0.0;  // delta [m]; 0: no fade-in, S = 1 (the step passes r_e of the gradient)
   const std::vector<Eigen::Vector3d>* positions = nullptr;
   const std::vector<ParticleKind>* kinds = nullptr;
   const PeriodicBoundary* periodic = nullptr;  // nullptr: none
