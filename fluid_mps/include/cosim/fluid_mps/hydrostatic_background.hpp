@@ -35,8 +35,8 @@ struct BackgroundInput {
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // [m/s^2]
   double density = 1000.0;                            // [kg/m^3]
   double particle_spacing = 0.0;                      // l0 [m]: the column bin width
-  double taper_depth =
-      0.0;  // delta [m]; 0: no fade-in, S = 1 (the step passes r_e of the gradient)
+  // delta [m]; 0: no fade-in, S = 1 (the step passes r_e of the gradient)
+  double taper_depth = 0.0;
   const std::vector<Eigen::Vector3d>* positions = nullptr;
   const std::vector<ParticleKind>* kinds = nullptr;
   const PeriodicBoundary* periodic = nullptr;  // nullptr: none
