@@ -79,10 +79,17 @@ class SurfaceHeights {
 
  private:
   static constexpr double kEmpty = -std::numeric_limits<double>::infinity();
+  // Per column bin: the surface of its lowest layer of water, and whether a wall holds it up
+  // (surfaces()).
+  struct Columns {
+    std::vector<double> surface;
+    std::vector<char> supported;
+  };
 
   // eta of each bin: the mean surface over the non-empty bins of its window (two bins either
   // way); S: the trust in it (see trust()).
-  void smooth(const std::vector<double>& surface) {
+  void smooth(const Columns& columns) {
+    const std::vector<double>& surface = columns.surface;
     smoothed_.assign(surface.size(), kEmpty);
     trust_.assign(surface.size(), kEmpty);
     // S looks as far as the operator reaches from the window's edge: a brink or a nappe within
@@ -96,10 +103,12 @@ class SurfaceHeights {
       for (int b0 = 0; b0 < bins_[0]; ++b0) {
         double sum = 0.0, lowest = -kEmpty, highest = kEmpty;
         int count = 0;
+        bool held = true;  // every column within reach rests on a wall
         for (int k1 = -reach1; k1 <= reach1; ++k1) {
           for (int k0 = -reach; k0 <= reach; ++k0) {
             const double h = lookup(surface, b0 + k0, b1 + k1);
             if (h == kEmpty) continue;
+            held = held && supported(columns, b0 + k0, b1 + k1);
             lowest = std::min(lowest, h);
             highest = std::max(highest, h);
             if (std::abs(k0) > kSmoothingBins || std::abs(k1) > kSmoothingBins) continue;
@@ -109,16 +118,22 @@ class SurfaceHeights {
         }
         if (count == 0) continue;
         smoothed_[index(b0, b1)] = sum / count;
-        trust_[index(b0, b1)] = trust(lowest, highest);
+        trust_[index(b0, b1)] = held ? trust(lowest, highest) : 0.0;
       }
     }
+  }
+  bool supported(const Columns& columns, int b0, int b1) const {
+    if (periodic_) b0 = ((b0 % bins_[0]) + bins_[0]) % bins_[0];
+    return columns.supported[index(b0, b1)] != 0;
   }
 
   // The free surface of each bin: half a spacing above the top particle of its lowest layer of
   // water (as water_level() reads it), the layer ending at the first gap of more than
   // kLayerGap l0 between heights. Water above such a gap (a nappe over the pool it falls into,
-  // a jet, a splash) is not the column's: it is not held up by the water below.
-  std::vector<double> surfaces() const {
+  // a jet, a splash) is not the column's: it is not held up by the water below. A column whose
+  // lowest water has no wall within the gap below or beside it (in its bin or the next) is
+  // not held up either (a nappe past a brink, a falling jet): `supported` is false there.
+  Columns surfaces() const {
     const auto& x = *in_.positions;
     const auto& kinds = *in_.kinds;
     const std::size_t bin_count = static_cast<std::size_t>(bins_[0]) * bins_[1];
@@ -134,18 +149,75 @@ class SurfaceHeights {
     for (std::size_t i = 0; i < x.size(); ++i) {
       if (is_fluid(kinds[i])) heights[next[bin[i]]++] = height(x[i]);
     }
-    const double gap = kLayerGap * in_.particle_spacing;
-    std::vector<double> surface(bin_count, kEmpty);
     for (std::size_t b = 0; b < bin_count; ++b) {
-      if (start[b] == start[b + 1]) continue;
-      const auto first = heights.begin() + static_cast<std::ptrdiff_t>(start[b]);
-      const auto last = heights.begin() + static_cast<std::ptrdiff_t>(start[b + 1]);
-      std::sort(first, last);
-      auto top = first;
-      while (top + 1 != last && *(top + 1) - *top <= gap) ++top;
-      surface[b] = *top + 0.5 * in_.particle_spacing;
+      std::sort(heights.begin() + static_cast<std::ptrdiff_t>(start[b]),
+                heights.begin() + static_cast<std::ptrdiff_t>(start[b + 1]));
     }
-    return surface;
+    // The layers are read off the band of the bin and its neighbours (3 l0 wide): within one
+    // bin of width l0, disordered particles leave vertical gaps of 4 l0 inside the water.
+    const double gap = kLayerGap * in_.particle_spacing;
+    const int side1 = in_.dimension == 3 ? 1 : 0;
+    Columns columns{std::vector<double>(bin_count, kEmpty), std::vector<char>(bin_count, 0)};
+    std::vector<double> bottom(bin_count, kEmpty), band;
+    for (int b1 = 0; b1 < bins_[1]; ++b1) {
+      for (int b0 = 0; b0 < bins_[0]; ++b0) {
+        const std::size_t b = index(b0, b1);
+        if (start[b] == start[b + 1]) continue;
+        band.clear();
+        for_neighbour_bins(b0, b1, side1, [&](std::size_t c) {
+          band.insert(band.end(), heights.begin() + static_cast<std::ptrdiff_t>(start[c]),
+                      heights.begin() + static_cast<std::ptrdiff_t>(start[c + 1]));
+        });
+        std::sort(band.begin(), band.end());
+        auto top = band.begin();
+        while (top + 1 != band.end() && *(top + 1) - *top <= gap) ++top;
+        // The bin's own highest particle in that layer.
+        const auto own_first = heights.begin() + static_cast<std::ptrdiff_t>(start[b]);
+        const auto own_end = std::upper_bound(
+            own_first, heights.begin() + static_cast<std::ptrdiff_t>(start[b + 1]), *top);
+        if (own_end == own_first) continue;  // all its water is above the layer
+        columns.surface[b] = *(own_end - 1) + 0.5 * in_.particle_spacing;
+        bottom[b] = band.front();
+      }
+    }
+    // Walls within the gap of a column's bottom, in its bin or the next either way (a wall
+    // particle on a bin edge may fall on either side).
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (is_fluid(kinds[i]) || !carries_pressure(kinds[i])) continue;
+      std::array<int, 2> b{0, 0};
+      if (!unclamped_bin(x[i], b)) continue;
+      const double h = height(x[i]);
+      for_neighbour_bins(b[0], b[1], side1, [&](std::size_t c) {
+        if (bottom[c] != kEmpty && std::abs(h - bottom[c]) <= gap) columns.supported[c] = 1;
+      });
+    }
+    return columns;
+  }
+  // Calls visit(bin index) for (b0, b1) and its neighbours one bin either way along axis 0 (and
+  // `side1` along axis 1), wrapping a periodic axis 0.
+  template <class Visit>
+  void for_neighbour_bins(int b0, int b1, int side1, Visit&& visit) const {
+    for (int k1 = -side1; k1 <= side1; ++k1) {
+      for (int k0 = -1; k0 <= 1; ++k0) {
+        int c0 = b0 + k0;
+        const int c1 = b1 + k1;
+        if (periodic_) c0 = (c0 + bins_[0]) % bins_[0];
+        if (c0 < 0 || c0 >= bins_[0] || c1 < 0 || c1 >= bins_[1]) continue;
+        visit(index(c0, c1));
+      }
+    }
+  }
+  // The bin of x without clamping; false outside the bins (a wall beyond the water).
+  bool unclamped_bin(const Eigen::Vector3d& x, std::array<int, 2>& b) const {
+    for (int a = 0; a < in_.dimension - 1; ++a) {
+      const double coordinate = a == 0 && periodic_ ? in_.periodic->fold(x[axis_[a]]) : x[axis_[a]];
+      b[a] = static_cast<int>(std::floor((coordinate - origin_[a]) / width_[a]));
+      if (b[a] < 0 || b[a] >= bins_[a]) {
+        if (!(a == 0 && periodic_)) return false;
+        b[a] = std::clamp(b[a], 0, bins_[a] - 1);  // a fold that rounds onto the seam
+      }
+    }
+    return true;
   }
 
   double height(const Eigen::Vector3d& x) const { return sign_ * x[up_]; }

@@ -15,8 +15,9 @@ namespace {
 constexpr double kRho = 1000.0, kG = 9.81, kL0 = 0.01;
 constexpr double kHalf = 0.5 * kL0;  // the surface lies half a spacing above the top particles
 
-// Columns of fluid particles whose top particle sits at eta(x, z) exactly, `rows` deep, over
-// two rows of wall and one of dummies (2D: one layer in z).
+// Columns of fluid particles whose top particle sits at eta(x, z) exactly, down to the bed (the
+// lowest at most a spacing above it), over two rows of wall and one of dummies (2D: one layer
+// in z).
 struct Layer {
   std::vector<Eigen::Vector3d> positions;
   std::vector<ParticleKind> kinds;
@@ -35,7 +36,7 @@ struct Layer {
 };
 
 template <class Surface>
-Layer layer(int dimension, int columns, int rows, Surface&& eta) {
+Layer layer(int dimension, int columns, Surface&& eta) {
   Layer l;
   const int layers = dimension == 3 ? columns : 1;
   const int up = dimension == 3 ? 2 : 1;
@@ -45,6 +46,7 @@ Layer layer(int dimension, int columns, int rows, Surface&& eta) {
       base.x() = (c0 + 0.5) * kL0;
       if (dimension == 3) base.y() = (c1 + 0.5) * kL0;
       const double top = eta(base.x(), base.y());
+      const int rows = static_cast<int>(std::floor(top / kL0 + 1e-9)) + 1;
       for (int r = -3; r < rows; ++r) {
         Eigen::Vector3d x = base;
         x[up] = r < 0 ? (r + 0.5) * kL0 : top - (rows - 1 - r) * kL0;
@@ -61,7 +63,7 @@ Layer layer(int dimension, int columns, int rows, Surface&& eta) {
 }  // namespace
 
 TEST(MpsHydrostaticBackground, FlatLayerIsHydrostaticBelowTheTopParticles) {
-  const Layer l = layer(2, 20, 10, [](double, double) { return 0.1; });
+  const Layer l = layer(2, 20, [](double, double) { return 0.1; });
   std::vector<double> p;
   std::vector<Eigen::Vector3d> g;
   hydrostatic_background(l.input(2), p, g);
@@ -83,7 +85,7 @@ TEST(MpsHydrostaticBackground, FlatLayerIsHydrostaticBelowTheTopParticles) {
 TEST(MpsHydrostaticBackground, SlopingSurfaceGivesItsSlopeInTheInterior) {
   const double slope = 0.05;
   auto eta = [&](double x, double) { return 0.1 - slope * x; };
-  const Layer l = layer(2, 30, 8, eta);
+  const Layer l = layer(2, 30, eta);
   std::vector<double> p;
   std::vector<Eigen::Vector3d> g;
   hydrostatic_background(l.input(2), p, g);
@@ -104,7 +106,7 @@ TEST(MpsHydrostaticBackground, PeriodicSeamKeepsTheSlopeOfADroppingChannel) {
   const int columns = 20;
   const double length = columns * kL0, drop = 0.004;
   auto eta = [&](double x, double) { return 0.1 - drop * x / length; };
-  Layer l = layer(2, columns, 8, eta);
+  Layer l = layer(2, columns, eta);
   l.periodic.enabled = true;
   l.periodic.x_min = 0.0;
   l.periodic.x_max = length;
@@ -127,7 +129,7 @@ TEST(MpsHydrostaticBackground, PeriodicSeamKeepsTheSlopeOfADroppingChannel) {
 TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
   const double sx = 0.03, sy = -0.02;
   auto eta = [&](double x, double y) { return 0.08 + sx * x + sy * y; };
-  const Layer l = layer(3, 12, 5, eta);
+  const Layer l = layer(3, 12, eta);
   std::vector<double> p;
   std::vector<Eigen::Vector3d> g;
   hydrostatic_background(l.input(3), p, g);
@@ -148,7 +150,7 @@ TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
 
 TEST(MpsHydrostaticBackground, NoBackgroundFarFromTheWater) {
   // Water over the first 10 columns only; the bed goes on for 20 more.
-  Layer l = layer(2, 30, 6, [](double, double) { return 0.05; });
+  Layer l = layer(2, 30, [](double, double) { return 0.05; });
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] == ParticleKind::fluid && l.positions[i].x() > 10.0 * kL0)
       l.kinds[i] = ParticleKind::inactive;
@@ -172,11 +174,7 @@ TEST(MpsHydrostaticBackground, FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces
   // A deep block (eta = 0.2 m) over the first 15 columns, a layer 3 cm deep after it: a step of
   // 17 cm, far more than 2 delta.
   const double delta = 0.04;
-  Layer l = layer(2, 40, 18, [](double x, double) { return x < 0.15 ? 0.2 : 0.03; });
-  for (std::size_t i = 0; i < l.positions.size(); ++i) {
-    if (l.kinds[i] == ParticleKind::fluid && l.positions[i].y() < 0.0)
-      l.kinds[i] = ParticleKind::inactive;  // the layer's columns hold 4 particles, not 18
-  }
+  const Layer l = layer(2, 40, [](double x, double) { return x < 0.15 ? 0.2 : 0.03; });
   BackgroundInput in = l.input(2);
   in.taper_depth = delta;
   std::vector<double> p;
@@ -208,7 +206,7 @@ TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
   // A pool 5 cm deep, and a jet 3 cm thick flying 5 cm above it over columns 8-15 (a nappe over
   // the pool it falls into): the pool's background is that of its own surface, the jet has none.
   const double pool = 0.05;
-  Layer l = layer(2, 24, 6, [&](double, double) { return pool; });
+  Layer l = layer(2, 24, [&](double, double) { return pool; });
   for (int c = 8; c < 16; ++c) {
     for (int r = 0; r < 3; ++r) {
       l.positions.emplace_back((c + 0.5) * kL0, pool + 0.06 + r * kL0, 0.0);
@@ -234,4 +232,35 @@ TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
   }
   EXPECT_EQ(pool_checked, 24 * 6);
   EXPECT_EQ(jet_checked, 8 * 3);
+}
+
+TEST(MpsHydrostaticBackground, NoBackgroundNearWaterThatNoWallHoldsUp) {
+  // A layer 3 cm deep whose bed ends at x = 0.1 m; past it the same water has nothing below
+  // (a nappe leaving a brink): no trust in the columns within reach of the unsupported ones.
+  Layer l = layer(2, 30, [](double, double) { return 0.03; });
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid && l.positions[i].x() > 0.1)
+      l.kinds[i] = ParticleKind::inactive;
+  }
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  int upstream = 0, past = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& x = l.positions[i];
+    // Columns 10 and up have no wall in their bin or the one before (column 10 has column 9's):
+    // bins 9 to 13 see column 11 within their two bins either way; bin 8's centre is the last
+    // interpolated from trusted bins only.
+    if (x.x() < 8.5 * kL0) {
+      EXPECT_NEAR(p[i], kRho * kG * (0.03 + kHalf - x.y()), 1e-9) << x.transpose();
+      ++upstream;
+    } else if (x.x() > 9.5 * kL0) {
+      EXPECT_EQ(p[i], 0.0) << x.transpose();
+      EXPECT_EQ(g[i].norm(), 0.0) << x.transpose();
+      ++past;
+    }
+  }
+  EXPECT_EQ(upstream, 8 * 4);
+  EXPECT_EQ(past, 20 * 4);
 }
