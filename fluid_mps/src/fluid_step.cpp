@@ -389,7 +389,7 @@ void FluidSystem::measure_background() {
   b.positions = &position_star_;
   b.kinds = &kind_;
   b.periodic = &p.periodic;
-  hydrostatic_background(b, background_pressure_, background_gradient_);
+  hydrostatic_background(b, background_pressure_, background_gradient_, &background_trust_);
 }
 
 // 5. Pressure gradient (seed 000 eq. (2), radius re_g) by MpsParameters::GradientForm
@@ -423,16 +423,29 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     in.pressure = &dynamic_pressure_;
   }
   pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_);
+  if (background) {
+    // The operator on the whole pressure, taken where the column is not trusted (1 - S).
+    in.pressure = &pressure_;
+    pressure_gradients(p.gradient_form, in, background_change_, background_wall_change_,
+                       minimum_);
+  }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kind_[i])) continue;
     // Among solids the neighbourhood is (1 - phi) full, so the sum is normalised by (1 - phi) n0.
     const double local_factor = factor / (1.0 - phi_[i]);
+    if (background) {
+      const double trusted = background_trust_[i], untrusted = 1.0 - trusted;
+      pressure_change_[i] = trusted * pressure_change_[i] + untrusted * background_change_[i];
+      wall_pressure_change_[i] =
+          trusted * wall_pressure_change_[i] + untrusted * background_wall_change_[i];
+    }
     pressure_change_[i] = -local_factor * pressure_change_[i];
     wall_pressure_change_[i] = -local_factor * wall_pressure_change_[i];
     // The background's own gradient is exact: no neighbourhood to normalise. It is booked with
     // the fluid's pressure, not the walls' (it is the water column's weight).
-    if (background) pressure_change_[i] -= c.dt / p.density * background_gradient_[i];
+    if (background)
+      pressure_change_[i] -= c.dt / p.density * background_trust_[i] * background_gradient_[i];
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {

@@ -55,15 +55,24 @@ class SurfaceHeights {
   }
 
   // p_b and its gradient at x.
-  void background(const Eigen::Vector3d& x, double& pressure, Eigen::Vector3d& gradient) const {
+  // With `trust_out`, p_b and its gradient without S, and S apart (see the header).
+  void background(const Eigen::Vector3d& x, double& pressure, Eigen::Vector3d& gradient,
+                  double* trust_out) const {
     pressure = 0.0;
     gradient.setZero();
+    if (trust_out) *trust_out = 0.0;
     double eta = 0.0, trust = 0.0;
     std::array<double, 2> eta_slope{0.0, 0.0}, trust_slope{0.0, 0.0};
     if (!interpolate(smoothed_, true, x, eta, eta_slope)) return;
     interpolate(trust_, false, x, trust, trust_slope);
     const double depth = eta - height(x);
-    if (depth <= 0.0 || trust <= 0.0) return;
+    if (depth <= 0.0) return;
+    if (trust_out) {
+      *trust_out = std::max(trust, 0.0);
+      trust = 1.0;
+      trust_slope = {0.0, 0.0};
+    }
+    if (trust <= 0.0) return;
     // Tapered over the surface layer: f(d) = d^2 / (2 delta) below delta, d - delta / 2 deeper
     // (continuous with its slope f' = min(d / delta, 1)); times the trust S of the column.
     const double delta = in_.taper_depth;
@@ -83,6 +92,7 @@ class SurfaceHeights {
   // (surfaces()).
   struct Columns {
     std::vector<double> surface;
+    std::vector<double> bottom;  // the lowest water of the layer (the bed under it, l0 / 2 up)
     std::vector<char> supported;
   };
 
@@ -102,6 +112,7 @@ class SurfaceHeights {
     for (int b1 = 0; b1 < bins_[1]; ++b1) {
       for (int b0 = 0; b0 < bins_[0]; ++b0) {
         double sum = 0.0, lowest = -kEmpty, highest = kEmpty;
+        double lowest_bed = -kEmpty, highest_bed = kEmpty;
         int count = 0;
         bool held = true;  // every column within reach rests on a wall
         for (int k1 = -reach1; k1 <= reach1; ++k1) {
@@ -109,6 +120,9 @@ class SurfaceHeights {
             const double h = lookup(surface, b0 + k0, b1 + k1);
             if (h == kEmpty) continue;
             held = held && supported(columns, b0 + k0, b1 + k1);
+            const double bed = lookup(columns.bottom, b0 + k0, b1 + k1);
+            lowest_bed = std::min(lowest_bed, bed);
+            highest_bed = std::max(highest_bed, bed);
             lowest = std::min(lowest, h);
             highest = std::max(highest, h);
             if (std::abs(k0) > kSmoothingBins || std::abs(k1) > kSmoothingBins) continue;
@@ -118,7 +132,10 @@ class SurfaceHeights {
         }
         if (count == 0) continue;
         smoothed_[index(b0, b1)] = sum / count;
-        trust_[index(b0, b1)] = held ? trust(lowest, highest) : 0.0;
+        // A step in the bed within reach (a crest, the top of a partition, a brink's drop):
+        // water flows over it, not hydrostatic either.
+        trust_[index(b0, b1)] =
+            held ? trust(lowest, highest) * trust(lowest_bed, highest_bed) : 0.0;
       }
     }
   }
@@ -157,8 +174,10 @@ class SurfaceHeights {
     // bin of width l0, disordered particles leave vertical gaps of 4 l0 inside the water.
     const double gap = kLayerGap * in_.particle_spacing;
     const int side1 = in_.dimension == 3 ? 1 : 0;
-    Columns columns{std::vector<double>(bin_count, kEmpty), std::vector<char>(bin_count, 0)};
-    std::vector<double> bottom(bin_count, kEmpty), band;
+    Columns columns{std::vector<double>(bin_count, kEmpty), std::vector<double>(bin_count, kEmpty),
+                    std::vector<char>(bin_count, 0)};
+    std::vector<double>& bottom = columns.bottom;
+    std::vector<double> band;
     for (int b1 = 0; b1 < bins_[1]; ++b1) {
       for (int b0 = 0; b0 < bins_[0]; ++b0) {
         const std::size_t b = index(b0, b1);
@@ -317,17 +336,19 @@ class SurfaceHeights {
 }  // namespace
 
 void hydrostatic_background(const BackgroundInput& in, std::vector<double>& pressure,
-                            std::vector<Eigen::Vector3d>& gradient) {
+                            std::vector<Eigen::Vector3d>& gradient, std::vector<double>* trust) {
   const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
   pressure.assign(n, 0.0);
   gradient.assign(n, Eigen::Vector3d::Zero());
+  if (trust) trust->assign(n, 0.0);
   if (n == 0 || in.gravity.squaredNorm() == 0.0) return;
   const SurfaceHeights surface(in);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (carries_pressure(kinds[i]))
-      surface.background((*in.positions)[i], pressure[i], gradient[i]);
+      surface.background((*in.positions)[i], pressure[i], gradient[i],
+                         trust ? &(*trust)[i] : nullptr);
   }
 }
 

@@ -264,3 +264,67 @@ TEST(MpsHydrostaticBackground, NoBackgroundNearWaterThatNoWallHoldsUp) {
   EXPECT_EQ(upstream, 8 * 4);
   EXPECT_EQ(past, 20 * 4);
 }
+
+TEST(MpsHydrostaticBackground, TrustApartLeavesTheColumnFieldWhole) {
+  // The step of FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces, with S returned apart: the
+  // field is rho g f(eta - h) wherever there is water above, trusted or not, and S is 1 far
+  // from the step and 0 beside it.
+  const double delta = 0.04;
+  const Layer l = layer(2, 40, [](double x, double) { return x < 0.15 ? 0.2 : 0.03; });
+  BackgroundInput in = l.input(2);
+  in.taper_depth = delta;
+  std::vector<double> p, s, p_trusted;
+  std::vector<Eigen::Vector3d> g, g_trusted;
+  hydrostatic_background(in, p, g, &s);
+  hydrostatic_background(in, p_trusted, g_trusted);
+  int far = 0, beside = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid) continue;
+    const Eigen::Vector3d& x = l.positions[i];
+    if (x.x() < 0.08) {
+      EXPECT_EQ(s[i], 1.0) << x.transpose();
+      EXPECT_NEAR(p[i], p_trusted[i], 1e-9);
+      EXPECT_NEAR((g[i] - g_trusted[i]).norm(), 0.0, 1e-9);
+      ++far;
+    } else if (x.x() > 0.10 && x.x() < 0.20 && x.y() < 0.02) {
+      EXPECT_EQ(s[i], 0.0) << x.transpose();
+      EXPECT_GT(p[i], 0.0) << x.transpose();
+      EXPECT_EQ(p_trusted[i], 0.0) << x.transpose();
+      ++beside;
+    }
+  }
+  EXPECT_GT(far, 100);
+  EXPECT_GT(beside, 10);
+}
+
+TEST(MpsHydrostaticBackground, NoTrustNearAStepInTheBed) {
+  // A flat surface at 0.1 m over a bed that rises 5 cm at x = 0.2 m (the top of a partition, a
+  // crest): the water flows over the step, so S is 0 within reach of it and 1 far from it.
+  const double delta = 0.02;
+  Layer l = layer(2, 40, [](double, double) { return 0.1; });
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    const Eigen::Vector3d& x = l.positions[i];
+    if (x.x() > 0.2 && x.y() < 0.05 && l.kinds[i] == ParticleKind::fluid)
+      l.kinds[i] = ParticleKind::wall;  // the raised bed
+  }
+  BackgroundInput in = l.input(2);
+  in.taper_depth = delta;
+  std::vector<double> p, s;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(in, p, g, &s);
+  // Reach: 2 + delta / l0 = 4 bins either way, and one more of interpolation.
+  int far = 0, near = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    if (l.kinds[i] != ParticleKind::fluid) continue;
+    const double x = l.positions[i].x();
+    if (x < 0.14 || x > 0.26) {
+      EXPECT_EQ(s[i], 1.0) << x;
+      ++far;
+    } else if (x > 0.18 && x < 0.22) {
+      EXPECT_EQ(s[i], 0.0) << x;
+      ++near;
+    }
+  }
+  EXPECT_GT(far, 100);
+  EXPECT_GT(near, 10);
+}

@@ -42,8 +42,12 @@ struct BackgroundInput {
   const PeriodicBoundary* periodic = nullptr;  // nullptr: none
 };
 
-// p_b [Pa] and grad p_b [Pa/m] at every fluid and wall particle (zero at the others).
+// p_b [Pa] and grad p_b [Pa/m] at every fluid and wall particle (zero at the others). With
+// `trust`, S is returned there instead: pressure and gradient are those of rho |g_up| f(eta - h)
+// without it, for a correction that weighs the exact gradient against the particle operator's
+// reading of the same field by S (no gradient of S enters the force).
 void hydrostatic_background(const BackgroundInput& in, std::vector<double>& pressure,
-                            std::vector<Eigen::Vector3d>& gradient);
+                            std::vector<Eigen::Vector3d>& gradient,
+                            std::vector<double>* trust = nullptr);
 
 }  // namespace cosim::mps
