@@ -133,7 +133,8 @@ ParticleSet pool_fishway(MpsParameters& parameters, OpenBoundarySettings& inflow
   for (int i = 0; i < g.pool_particles; ++i) set.add(park, ParticleKind::inactive);
   if (parameters.domain.isEmpty()) {
     parameters.domain = Eigen::AlignedBox3d(
-        Eigen::Vector3d((first_column - layers - 4) * l0, inflow.outflow_min_height - 6.0 * l0, -l0),
+        Eigen::Vector3d((first_column - layers - 4) * l0, inflow.outflow_min_height - 6.0 * l0,
+                        -l0),
         Eigen::Vector3d(inflow.outflow_x + 4.0 * l0, 2.0 * block_rows * l0 + 10.0 * l0, l0));
   }
   return set;

@@ -426,8 +426,7 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
   if (background) {
     // The operator on the whole pressure, taken where the column is not trusted (1 - S).
     in.pressure = &pressure_;
-    pressure_gradients(p.gradient_form, in, background_change_, background_wall_change_,
-                       minimum_);
+    pressure_gradients(p.gradient_form, in, background_change_, background_wall_change_, minimum_);
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {

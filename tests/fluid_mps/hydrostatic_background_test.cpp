@@ -60,6 +60,15 @@ Layer layer(int dimension, int columns, Surface&& eta) {
   return l;
 }
 
+// The background of a column whose top particle is at `top`, and no background, at x.
+void expect_column(double p, double top, const Eigen::Vector3d& x) {
+  EXPECT_NEAR(p, kRho * kG * (top + kHalf - x.y()), 1e-9) << x.transpose();
+}
+void expect_none(double p, const Eigen::Vector3d& gradient, const Eigen::Vector3d& x) {
+  EXPECT_EQ(p, 0.0) << x.transpose();
+  EXPECT_EQ(gradient.norm(), 0.0) << x.transpose();
+}
+
 }  // namespace
 
 TEST(MpsHydrostaticBackground, FlatLayerIsHydrostaticBelowTheTopParticles) {
@@ -221,12 +230,11 @@ TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = l.positions[i];
     if (x.y() < pool + kHalf) {
-      EXPECT_NEAR(p[i], kRho * kG * (pool + kHalf - x.y()), 1e-9) << x.transpose();
+      expect_column(p[i], pool, x);
       EXPECT_NEAR(g[i].x(), 0.0, 1e-9) << x.transpose();
       ++pool_checked;
     } else {
-      EXPECT_EQ(p[i], 0.0) << x.transpose();
-      EXPECT_EQ(g[i].norm(), 0.0) << x.transpose();
+      expect_none(p[i], g[i], x);
       ++jet_checked;
     }
   }
@@ -253,11 +261,10 @@ TEST(MpsHydrostaticBackground, NoBackgroundNearWaterThatNoWallHoldsUp) {
     // bins 9 to 13 see column 11 within their two bins either way; bin 8's centre is the last
     // interpolated from trusted bins only.
     if (x.x() < 8.5 * kL0) {
-      EXPECT_NEAR(p[i], kRho * kG * (0.03 + kHalf - x.y()), 1e-9) << x.transpose();
+      expect_column(p[i], 0.03, x);
       ++upstream;
     } else if (x.x() > 9.5 * kL0) {
-      EXPECT_EQ(p[i], 0.0) << x.transpose();
-      EXPECT_EQ(g[i].norm(), 0.0) << x.transpose();
+      expect_none(p[i], g[i], x);
       ++past;
     }
   }

@@ -9,18 +9,27 @@
 //
 // p_b = rho |g_up| S(x_t) f(eta(x_t) - h), h the height along -g's dominant axis, eta the free
 // surface above x_t: half a spacing above the top particle of the lowest layer of water in each
-// column bin (width l0; water_level() reads the surface the same way; a layer ends at a gap of
-// more than 3 l0, so a nappe, jet or splash over air is not part of the column below it and has
-// no background of its own), averaged over the non-empty bins within two
+// column bin (width l0; water_level() reads the surface the same way). Layers are read off the
+// bin and its neighbours (3 l0 wide; one bin of disordered water has gaps of 4 l0 inside it) and
+// end at a gap of more than 3 l0, so a nappe, jet or splash over air is not part of the column
+// below it and has no background of its own. eta is averaged over the non-empty bins within two
 // bins either way and interpolated (bi)linearly between bin centres. f fades the background in
 // over the depth delta below the surface (f = d^2 / (2 delta) above delta, d - delta / 2 below,
 // so f' = min(d / delta, 1)): in that layer the operator still carries the particles' weight, as
-// without a background. S is the trust in the column: 1 where the raw heights within reach of
-// the operator from the smoothing window (2 + delta / l0 bins either way) span at most delta, 0
-// from 2 delta on (a steep face, a surge front, a brink, a nappe, a jet over air: the column
-// height says little of the pressure there), a smoothstep between, interpolated as eta.
-// Bins farther than two from any water have no background. Periodic channels wrap the bins
-// (with the period's drop). grad p_b is the exact gradient of this field.
+// without a background. S is the trust in the column, 0 to 1, interpolated as eta: within reach
+// of the operator from the smoothing window (2 + delta / l0 bins either way) the surface heights
+// and the bed heights (the lowest water of each column) must each span at most delta for 1, and
+// S is 0 from 2 delta on (a steep face, a surge front, a brink, a nappe, a crest or the top of a
+// partition: the column height says little of the pressure there), a smoothstep between; S is
+// also 0 within reach of water whose lowest particle has no wall within the gap below or beside
+// it (a nappe past a brink, a falling jet). Bins farther than two from any water have no
+// background. Periodic channels wrap the bins (with the period's drop). grad p_b is the exact
+// gradient of this field.
+//
+// The fluid step asks for S apart (`trust`) and weighs two whole estimates by it:
+// S (<grad q>_i + grad p_b) + (1 - S) <grad p>_i, with p_b here without S, so that no gradient
+// of S (rho g times the whole depth over a few bins) enters the force, and untrusted water steps
+// as without a background.
 #pragma once
 
 #include <Eigen/Core>

@@ -179,9 +179,10 @@ struct MpsParameters {
   // What the gradient operator carries (hydrostatic_background.hpp):
   //  none:        the whole pressure p.
   //  hydrostatic: q = p - p_b, with p_b = rho |g| (eta - h) of the local water column (faded in
-  //               over the gradient radius below the surface, off on steep surfaces) added back
-  //               by its exact gradient, so the operator's error scales with q, not with the
-  //               hydrostatic pressure.
+  //               over the gradient radius below the surface) added back by its exact gradient,
+  //               so the operator's error scales with q, not with the hydrostatic pressure;
+  //               weighed by the trust S against the operator on p where the column is not
+  //               hydrostatic (steep surfaces, steps in the bed, water no wall holds up).
   enum class PressureBackground { none, hydrostatic };
   PressureBackground pressure_background = PressureBackground::none;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
