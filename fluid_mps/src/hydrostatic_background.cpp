@@ -13,6 +13,10 @@ constexpr int kSmoothingBins = 2;  // eta is averaged over the bins within this 
 // A vertical gap of more than this many l0 between the fluid particles of a bin is air (a column
 // bin of width l0 has a particle about every l0; an fcc lattice leaves gaps up to 1.6 l0).
 constexpr double kLayerGap = 3.0;
+// No trust within this many depths of the water over a brink or a crest (the pressure over a free
+// overfall departs from hydrostatic about 3-4 critical depths upstream of the brink: Rouse 1936;
+// Chow 1959, ch. 3). fishway_overflow at l0 = 1 cm, crest 1: 17.4 % without it, 2.5 % with 3.
+constexpr double kFeatureDepths = 3.0;
 
 // Column bins over the horizontal axes (one in 2D, two in 3D) and the surface height of each.
 class SurfaceHeights {
@@ -138,6 +142,49 @@ class SurfaceHeights {
             held ? trust(lowest, highest) * trust(lowest_bed, highest_bed) : 0.0;
       }
     }
+    distrust_near_features(columns);
+  }
+  // S = 0 within kFeatureDepths times the depth of the water over a feature (a column no wall
+  // holds up, the higher side of a step in the bed), beyond the operator's reach where that is
+  // farther: the streamlines over a brink or a crest curve, and the pressure departs from
+  // hydrostatic, a few depths upstream of it.
+  void distrust_near_features(const Columns& columns) {
+    const double k = kFeatureDepths;
+    const double l0 = in_.particle_spacing;
+    // A step in the bed: more than the fade-in depth, and more than the bottoms of disordered
+    // water or a sloping bed differ from bin to bin.
+    const double step = std::max(in_.taper_depth, 2.0 * l0);
+    const int side1 = in_.dimension == 3 ? 1 : 0;
+    for (int b1 = 0; b1 < bins_[1]; ++b1) {
+      for (int b0 = 0; b0 < bins_[0]; ++b0) {
+        const double h = lookup(columns.surface, b0, b1);
+        if (h == kEmpty) continue;
+        const double bed = lookup(columns.bottom, b0, b1);
+        bool feature = !supported(columns, b0, b1);
+        for (int k1 = -side1; k1 <= side1 && !feature; ++k1) {
+          for (int k0 = -1; k0 <= 1; ++k0) {
+            const double other = lookup(columns.bottom, b0 + k0, b1 + k1);
+            if (other != kEmpty && bed - other > step) feature = true;
+          }
+        }
+        if (!feature) continue;
+        const int radius = static_cast<int>(std::ceil(k * (h - bed) / l0));
+        const int radius1 = in_.dimension == 3 ? radius : 0;
+        for (int k1 = -radius1; k1 <= radius1; ++k1) {
+          for (int k0 = -radius; k0 <= radius; ++k0) {
+            const int c0 = b0 + k0, c1 = b1 + k1;
+            if (c1 < 0 || c1 >= bins_[1]) continue;
+            if (!periodic_ && (c0 < 0 || c0 >= bins_[0])) continue;
+            const std::size_t c = wrapped(c0, c1);
+            if (trust_[c] != kEmpty) trust_[c] = 0.0;
+          }
+        }
+      }
+    }
+  }
+  std::size_t wrapped(int b0, int b1) const {
+    if (periodic_) b0 = ((b0 % bins_[0]) + bins_[0]) % bins_[0];
+    return index(b0, b1);
   }
   bool supported(const Columns& columns, int b0, int b1) const {
     if (periodic_) b0 = ((b0 % bins_[0]) + bins_[0]) % bins_[0];

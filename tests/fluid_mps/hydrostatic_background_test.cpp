@@ -243,11 +243,11 @@ TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
 }
 
 TEST(MpsHydrostaticBackground, NoBackgroundNearWaterThatNoWallHoldsUp) {
-  // A layer 3 cm deep whose bed ends at x = 0.1 m; past it the same water has nothing below
-  // (a nappe leaving a brink): no trust in the columns within reach of the unsupported ones.
-  Layer l = layer(2, 30, [](double, double) { return 0.03; });
+  // A layer 3 cm deep whose bed ends at x = 0.4 m; past it the same water has nothing below
+  // (a nappe leaving a brink): no trust within three depths of the unsupported columns.
+  Layer l = layer(2, 60, [](double, double) { return 0.03; });
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
-    if (l.kinds[i] != ParticleKind::fluid && l.positions[i].x() > 0.1)
+    if (l.kinds[i] != ParticleKind::fluid && l.positions[i].x() > 0.4)
       l.kinds[i] = ParticleKind::inactive;
   }
   std::vector<double> p;
@@ -257,19 +257,19 @@ TEST(MpsHydrostaticBackground, NoBackgroundNearWaterThatNoWallHoldsUp) {
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
     const Eigen::Vector3d& x = l.positions[i];
-    // Columns 10 and up have no wall in their bin or the one before (column 10 has column 9's):
-    // bins 9 to 13 see column 11 within their two bins either way; bin 8's centre is the last
-    // interpolated from trusted bins only.
-    if (x.x() < 8.5 * kL0) {
+    // Columns 41 and up have no wall in their bin or the one before (column 40 has column 39's);
+    // three depths of 3.5 cm reach 11 bins from column 41: bins 30 and up have S = 0, bin 29's
+    // centre is the last interpolated from trusted bins only.
+    if (x.x() < 29.5 * kL0) {
       expect_column(p[i], 0.03, x);
       ++upstream;
-    } else if (x.x() > 9.5 * kL0) {
+    } else if (x.x() > 30.5 * kL0) {
       expect_none(p[i], g[i], x);
       ++past;
     }
   }
-  EXPECT_EQ(upstream, 8 * 4);
-  EXPECT_EQ(past, 20 * 4);
+  EXPECT_EQ(upstream, 29 * 4);
+  EXPECT_EQ(past, 29 * 4);
 }
 
 TEST(MpsHydrostaticBackground, TrustApartLeavesTheColumnFieldWhole) {
@@ -305,13 +305,14 @@ TEST(MpsHydrostaticBackground, TrustApartLeavesTheColumnFieldWhole) {
 }
 
 TEST(MpsHydrostaticBackground, NoTrustNearAStepInTheBed) {
-  // A flat surface at 0.1 m over a bed that rises 5 cm at x = 0.2 m (the top of a partition, a
-  // crest): the water flows over the step, so S is 0 within reach of it and 1 far from it.
+  // A flat surface at 0.1 m over a bed that rises 5 cm at x = 0.4 m (the top of a partition, a
+  // crest): the water flows over the step, so S is 0 within three depths of the water over it
+  // (5.5 cm: 17 bins), far beyond the operator's reach, and 1 far from it.
   const double delta = 0.02;
-  Layer l = layer(2, 40, [](double, double) { return 0.1; });
+  Layer l = layer(2, 80, [](double, double) { return 0.1; });
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     const Eigen::Vector3d& x = l.positions[i];
-    if (x.x() > 0.2 && x.y() < 0.05 && l.kinds[i] == ParticleKind::fluid)
+    if (x.x() > 0.4 && x.y() < 0.05 && l.kinds[i] == ParticleKind::fluid)
       l.kinds[i] = ParticleKind::wall;  // the raised bed
   }
   BackgroundInput in = l.input(2);
@@ -319,15 +320,15 @@ TEST(MpsHydrostaticBackground, NoTrustNearAStepInTheBed) {
   std::vector<double> p, s;
   std::vector<Eigen::Vector3d> g;
   hydrostatic_background(in, p, g, &s);
-  // Reach: 2 + delta / l0 = 4 bins either way, and one more of interpolation.
+  // The raised side's first bin (40) is the feature: bins 23 to 57 have S = 0.
   int far = 0, near = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
     const double x = l.positions[i].x();
-    if (x < 0.14 || x > 0.26) {
+    if (x < 0.2 || x > 0.6) {
       EXPECT_EQ(s[i], 1.0) << x;
       ++far;
-    } else if (x > 0.18 && x < 0.22) {
+    } else if (x > 0.25 && x < 0.55) {
       EXPECT_EQ(s[i], 0.0) << x;
       ++near;
     }
