@@ -187,8 +187,7 @@ class SurfaceHeights {
     return index(b0, b1);
   }
   bool supported(const Columns& columns, int b0, int b1) const {
-    if (periodic_) b0 = ((b0 % bins_[0]) + bins_[0]) % bins_[0];
-    return columns.supported[index(b0, b1)] != 0;
+    return columns.supported[wrapped(b0, b1)] != 0;
   }
 
   // The free surface of each bin: half a spacing above the top particle of its lowest layer of

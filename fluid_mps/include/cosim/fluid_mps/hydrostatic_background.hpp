@@ -22,7 +22,9 @@
 // S is 0 from 2 delta on (a steep face, a surge front, a brink, a nappe, a crest or the top of a
 // partition: the column height says little of the pressure there), a smoothstep between; S is
 // also 0 within reach of water whose lowest particle has no wall within the gap below or beside
-// it (a nappe past a brink, a falling jet). Bins farther than two from any water have no
+// it (a nappe past a brink, a falling jet), and within three depths of the water over such a
+// column or over the higher side of a step in the bed (the flow over a brink or a crest curves a
+// few depths upstream of it), where that is farther. Bins farther than two from any water have no
 // background. Periodic channels wrap the bins (with the period's drop). grad p_b is the exact
 // gradient of this field.
 //
