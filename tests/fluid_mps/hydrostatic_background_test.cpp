@@ -336,3 +336,26 @@ TEST(MpsHydrostaticBackground, NoTrustNearAStepInTheBed) {
   EXPECT_GT(far, 100);
   EXPECT_GT(near, 10);
 }
+
+TEST(MpsHydrostaticBackground, AGapInOneBinWithWaterBesideItIsNotAir) {
+  // Disordered water can leave one l0 bin without particles over 4 l0 of its height while its
+  // neighbours fill that height: the column is still one layer up to its top particle.
+  Layer l = layer(2, 20, [](double, double) { return 0.1; });
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    const Eigen::Vector3d& x = l.positions[i];
+    if (l.kinds[i] == ParticleKind::fluid && x.x() > 0.1 && x.x() < 0.11 && x.y() > 0.025 &&
+        x.y() < 0.075)
+      l.kinds[i] = ParticleKind::inactive;  // column 10: no particle from 0.03 to 0.07 m
+  }
+  std::vector<double> p;
+  std::vector<Eigen::Vector3d> g;
+  hydrostatic_background(l.input(2), p, g);
+  int below_gap = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    const Eigen::Vector3d& x = l.positions[i];
+    if (l.kinds[i] != ParticleKind::fluid || x.x() < 0.1 || x.x() > 0.11 || x.y() > 0.025) continue;
+    expect_column(p[i], 0.1, x);
+    ++below_gap;
+  }
+  EXPECT_EQ(below_gap, 3);
+}
