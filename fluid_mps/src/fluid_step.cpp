@@ -389,7 +389,7 @@ void FluidSystem::measure_background() {
   b.positions = &position_star_;
   b.kinds = &kind_;
   b.periodic = &p.periodic;
-  hydrostatic_background(b, background_pressure_, background_gradient_, &background_trust_);
+  hydrostatic_background(b, background_);
 }
 
 // 5. Pressure gradient (seed 000 eq. (2), radius re_g) by MpsParameters::GradientForm
@@ -415,18 +415,26 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
   in.solid_fraction = &phi_;
   const bool background = p.pressure_background == MpsParameters::PressureBackground::hydrostatic;
   if (background) {
-    // The operator carries q = p - p_b; grad p_b is added back exactly below.
+    // S (<grad q> + grad p_b) + (1 - S) <grad p>, q = p - p_b: each estimate only where its weight
+    // is not zero (with S = 1 everywhere, as in rigid_canopy, the second costs nothing).
     measure_background();
     dynamic_pressure_.resize(n);
+    trusted_.resize(n);
+    untrusted_.resize(n);
 #pragma omp parallel for schedule(static) if (n >= 4096)
-    for (int i = 0; i < n; ++i) dynamic_pressure_[i] = pressure_[i] - background_pressure_[i];
+    for (int i = 0; i < n; ++i) {
+      dynamic_pressure_[i] = pressure_[i] - background_.pressure[i];
+      trusted_[i] = background_.trust[i] > 0.0;
+      untrusted_[i] = background_.trust[i] < 1.0;
+    }
     in.pressure = &dynamic_pressure_;
-  }
-  pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_);
-  if (background) {
-    // The operator on the whole pressure, taken where the column is not trusted (1 - S).
+    pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_,
+                       &trusted_);
     in.pressure = &pressure_;
-    pressure_gradients(p.gradient_form, in, background_change_, background_wall_change_, minimum_);
+    pressure_gradients(p.gradient_form, in, untrusted_change_, untrusted_wall_change_, minimum_,
+                       &untrusted_);
+  } else {
+    pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_);
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
@@ -434,17 +442,17 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     // Among solids the neighbourhood is (1 - phi) full, so the sum is normalised by (1 - phi) n0.
     const double local_factor = factor / (1.0 - phi_[i]);
     if (background) {
-      const double trusted = background_trust_[i], untrusted = 1.0 - trusted;
-      pressure_change_[i] = trusted * pressure_change_[i] + untrusted * background_change_[i];
+      const double trusted = background_.trust[i], untrusted = 1.0 - trusted;
+      pressure_change_[i] = trusted * pressure_change_[i] + untrusted * untrusted_change_[i];
       wall_pressure_change_[i] =
-          trusted * wall_pressure_change_[i] + untrusted * background_wall_change_[i];
+          trusted * wall_pressure_change_[i] + untrusted * untrusted_wall_change_[i];
     }
     pressure_change_[i] = -local_factor * pressure_change_[i];
     wall_pressure_change_[i] = -local_factor * wall_pressure_change_[i];
     // The background's own gradient is exact: no neighbourhood to normalise. It is booked with
     // the fluid's pressure, not the walls' (it is the water column's weight).
     if (background)
-      pressure_change_[i] -= c.dt / p.density * background_trust_[i] * background_gradient_[i];
+      pressure_change_[i] -= c.dt / p.density * background_.trust[i] * background_.gradient[i];
   }
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {

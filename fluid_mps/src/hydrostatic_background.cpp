@@ -61,33 +61,26 @@ class SurfaceHeights {
   // p_b and its gradient at x.
   // With `trust_out`, p_b and its gradient without S, and S apart (see the header).
   void background(const Eigen::Vector3d& x, double& pressure, Eigen::Vector3d& gradient,
-                  double* trust_out) const {
+                  double& trust) const {
     pressure = 0.0;
     gradient.setZero();
-    if (trust_out) *trust_out = 0.0;
-    double eta = 0.0, trust = 0.0;
-    std::array<double, 2> eta_slope{0.0, 0.0}, trust_slope{0.0, 0.0};
+    trust = 0.0;
+    double eta = 0.0, column_trust = 0.0;
+    std::array<double, 2> eta_slope{0.0, 0.0}, unused{0.0, 0.0};
     if (!interpolate(smoothed_, true, x, eta, eta_slope)) return;
-    interpolate(trust_, false, x, trust, trust_slope);
+    interpolate(trust_, false, x, column_trust, unused);
     const double depth = eta - height(x);
     if (depth <= 0.0) return;
-    if (trust_out) {
-      *trust_out = std::max(trust, 0.0);
-      trust = 1.0;
-      trust_slope = {0.0, 0.0};
-    }
-    if (trust <= 0.0) return;
+    trust = std::max(column_trust, 0.0);
     // Tapered over the surface layer: f(d) = d^2 / (2 delta) below delta, d - delta / 2 deeper
-    // (continuous with its slope f' = min(d / delta, 1)); times the trust S of the column.
+    // (continuous with its slope f' = min(d / delta, 1)).
     const double delta = in_.taper_depth;
     const double rho_g = in_.density * g_up_;
     const double f = depth < delta ? 0.5 * depth * depth / delta : depth - 0.5 * delta;
     const double df = depth < delta ? depth / delta : 1.0;
-    pressure = rho_g * trust * f;
-    for (int a = 0; a < in_.dimension - 1; ++a) {
-      gradient[axis_[a]] = rho_g * (f * trust_slope[a] + trust * df * eta_slope[a]);
-    }
-    gradient[up_] = -rho_g * trust * df * sign_;
+    pressure = rho_g * f;
+    for (int a = 0; a < in_.dimension - 1; ++a) gradient[axis_[a]] = rho_g * (df * eta_slope[a]);
+    gradient[up_] = -rho_g * df * sign_;
   }
 
  private:
@@ -381,20 +374,18 @@ class SurfaceHeights {
 
 }  // namespace
 
-void hydrostatic_background(const BackgroundInput& in, std::vector<double>& pressure,
-                            std::vector<Eigen::Vector3d>& gradient, std::vector<double>* trust) {
+void hydrostatic_background(const BackgroundInput& in, BackgroundField& out) {
   const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
-  pressure.assign(n, 0.0);
-  gradient.assign(n, Eigen::Vector3d::Zero());
-  if (trust) trust->assign(n, 0.0);
+  out.pressure.assign(n, 0.0);
+  out.gradient.assign(n, Eigen::Vector3d::Zero());
+  out.trust.assign(n, 0.0);
   if (n == 0 || in.gravity.squaredNorm() == 0.0) return;
   const SurfaceHeights surface(in);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (carries_pressure(kinds[i]))
-      surface.background((*in.positions)[i], pressure[i], gradient[i],
-                         trust ? &(*trust)[i] : nullptr);
+      surface.background((*in.positions)[i], out.pressure[i], out.gradient[i], out.trust[i]);
   }
 }
 

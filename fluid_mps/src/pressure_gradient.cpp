@@ -17,7 +17,8 @@ using Form = MpsParameters::GradientForm;
 
 // p^_i: the smallest pressure of i and its pressure-carrying neighbours within the radius
 // (Koshizuka & Oka 1996): subtracting it keeps every pair force repulsive.
-void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum) {
+void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum,
+                           const std::vector<char>* evaluate) {
   const NeighbourList& list = *in.neighbours;
   const auto& kinds = *in.kinds;
   const auto& p = *in.pressure;
@@ -25,7 +26,7 @@ void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum
   minimum.assign(n, 0.0);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (!is_fluid(kinds[i])) continue;
+    if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
     double smallest = p[i];
     for (std::int64_t k = in.begin(i); k < in.end(i); ++k) {
       const int j = list.index[k];
@@ -289,7 +290,7 @@ void gradient_at(Form form, const GradientInput& in, int i, const std::vector<do
 
 void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& in,
                         std::vector<Eigen::Vector3d>& gradient, std::vector<Eigen::Vector3d>& wall,
-                        std::vector<double>& minimum) {
+                        std::vector<double>& minimum, const std::vector<char>* evaluate) {
   const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
   gradient.assign(n, Eigen::Vector3d::Zero());
@@ -300,13 +301,14 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
   if (form == Form::symmetric || form == Form::symmetric_normal_wall) {
     minimum.assign(n, 0.0);
   } else {
-    neighbourhood_minimum(in, minimum);
+    neighbourhood_minimum(in, minimum, evaluate);
   }
   std::vector<Eigen::Vector3d> normals;
   if (form == Form::symmetric_normal_wall) wall_normals(in, normals);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (is_fluid(kinds[i])) gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);
+    if (is_fluid(kinds[i]) && (!evaluate || (*evaluate)[i]))
+      gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);
   }
 }
 

@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include "cosim/fluid_mps/hydrostatic_background.hpp"
 #include "cosim/fluid_mps/kernels.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
@@ -246,10 +247,12 @@ class FluidSystem {
   PressureSolver pressure_solver_;
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
   std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,
-      wall_correction_, pressure_change_, wall_pressure_change_, background_gradient_,
-      background_change_, background_wall_change_;
+      wall_correction_, pressure_change_, wall_pressure_change_, untrusted_change_,
+      untrusted_wall_change_;
   std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_,
-      background_pressure_, dynamic_pressure_, background_trust_;
+      dynamic_pressure_;
+  BackgroundField background_;
+  std::vector<char> trusted_, untrusted_;  // S > 0, S < 1: where each estimate is needed
   std::vector<int> collided_, unknown_, unknown_particle_;
   std::vector<std::int64_t> row_length_;
   SparseRows matrix_, hierarchy_matrix_;

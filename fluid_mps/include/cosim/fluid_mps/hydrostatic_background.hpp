@@ -7,7 +7,7 @@
 // the background's gradient is added analytically: grad p = grad p_b(x_i) + <grad q>_i. The
 // split is exact in the continuum; it changes only which part the discrete operator carries.
 //
-// p_b = rho |g_up| S(x_t) f(eta(x_t) - h), h the height along -g's dominant axis, eta the free
+// p_b = rho |g_up| f(eta(x_t) - h), h the height along -g's dominant axis, eta the free
 // surface above x_t: half a spacing above the top particle of the lowest layer of water in each
 // column bin (width l0; water_level() reads the surface the same way). Layers are read off the
 // bin and its neighbours (3 l0 wide; one bin of disordered water has gaps of 4 l0 inside it) and
@@ -28,10 +28,9 @@
 // background. Periodic channels wrap the bins (with the period's drop). grad p_b is the exact
 // gradient of this field.
 //
-// The fluid step asks for S apart (`trust`) and weighs two whole estimates by it:
-// S (<grad q>_i + grad p_b) + (1 - S) <grad p>_i, with p_b here without S, so that no gradient
-// of S (rho g times the whole depth over a few bins) enters the force, and untrusted water steps
-// as without a background.
+// The fluid step weighs two whole estimates by S: S (<grad q>_i + grad p_b) + (1 - S) <grad p>_i,
+// so that no gradient of S (rho g times the whole depth over a few bins) enters the force, and
+// untrusted water steps exactly as without a background.
 #pragma once
 
 #include <Eigen/Core>
@@ -53,12 +52,13 @@ struct BackgroundInput {
   const PeriodicBoundary* periodic = nullptr;  // nullptr: none
 };
 
-// p_b [Pa] and grad p_b [Pa/m] at every fluid and wall particle (zero at the others). With
-// `trust`, S is returned there instead: pressure and gradient are those of rho |g_up| f(eta - h)
-// without it, for a correction that weighs the exact gradient against the particle operator's
-// reading of the same field by S (no gradient of S enters the force).
-void hydrostatic_background(const BackgroundInput& in, std::vector<double>& pressure,
-                            std::vector<Eigen::Vector3d>& gradient,
-                            std::vector<double>* trust = nullptr);
+// The background at every fluid and wall particle (zero at the others).
+struct BackgroundField {
+  std::vector<double> pressure;           // p_b [Pa]
+  std::vector<Eigen::Vector3d> gradient;  // grad p_b [Pa/m]
+  std::vector<double> trust;              // S [-]
+};
+
+void hydrostatic_background(const BackgroundInput& in, BackgroundField& out);
 
 }  // namespace cosim::mps

@@ -43,9 +43,11 @@ struct GradientInput {
 // the step books as the walls' pressure force on the fluid. The corrected form returns n0/d C_i
 // times its sum, so the caller scales every form alike (and the minimum form keeps the bits of
 // the sum it always had). `minimum` is the work array of p^_i (smallest pressure around i).
+// With `evaluate`, only the fluid particles with evaluate[i] != 0 are evaluated (the others get
+// zero sums): the step weighs two estimates per particle and needs each only where it counts.
 void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& in,
                         std::vector<Eigen::Vector3d>& gradient, std::vector<Eigen::Vector3d>& wall,
-                        std::vector<double>& minimum);
+                        std::vector<double>& minimum, const std::vector<char>* evaluate = nullptr);
 
 // The correction matrix of Khayyer & Gotoh (2011), Appl. Ocean Res. 33: C_i = [sum_j w_ij
 // r_ij (x) r_ij / |r_ij|^2]^-1 over the non-dummy neighbours (the D x D block; the rest of the
