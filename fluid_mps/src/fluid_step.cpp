@@ -472,7 +472,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     in.radius = c.re_n;
     in.n0 = c.n0_n;
     shift_particles(in, velocity_star_, unknown_, p.shifting_coefficient, c.dt, p.particle_spacing,
-                    0.1 * p.particle_spacing, position_star_);
+                    0.1 * p.particle_spacing,
+                    p.shifted_velocity == MpsParameters::ShiftedVelocity::taylor, position_star_);
   }
 }
 

@@ -286,6 +286,32 @@ void gradient_at(Form form, const GradientInput& in, int i, const std::vector<do
   }
 }
 
+// u_i += J_i dr_i at every shifted particle (shift_particles), J_i the corrected velocity
+// gradient; every J_i from the velocities before the change, so the result does not depend on
+// the order (or the thread count).
+void carry_velocities(const GradientInput& in, const std::vector<Eigen::Vector3d>& shift,
+                      std::vector<Eigen::Vector3d>& velocities) {
+  const NeighbourList& list = *in.neighbours;
+  const auto& kinds = *in.kinds;
+  const auto& x = *in.positions;
+  const int n = static_cast<int>(kinds.size());
+  std::vector<Eigen::Vector3d> change(n, Eigen::Vector3d::Zero());
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (!is_fluid(kinds[i]) || shift[i].squaredNorm() == 0.0) continue;
+    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+    for (std::int64_t k = in.begin(i); k < in.end(i); ++k) {
+      const int j = list.index[k];
+      const double r = list.distance[k];
+      if (!carries_pressure(kinds[j]) || r >= in.radius) continue;
+      const Eigen::Vector3d rij = in.periodic->wrap(x[j] - x[i]);
+      sum += (weight(r, in.radius) / (r * r)) * (velocities[j] - velocities[i]) * rij.transpose();
+    }
+    change[i] = sum * (correction_matrix(in, i) * shift[i]);
+  }
+  for (int i = 0; i < n; ++i) velocities[i] += change[i];
+}
+
 }  // namespace
 
 void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& in,
@@ -312,9 +338,9 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
   }
 }
 
-double shift_particles(const GradientInput& in, const std::vector<Eigen::Vector3d>& velocities,
+double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& velocities,
                        const std::vector<int>& pressure_unknown, double coefficient, double dt,
-                       double particle_spacing, double max_shift,
+                       double particle_spacing, double max_shift, bool taylor,
                        std::vector<Eigen::Vector3d>& positions_out) {
   const NeighbourList& list = *in.neighbours;
   const auto& kinds = *in.kinds;
@@ -343,6 +369,7 @@ double shift_particles(const GradientInput& in, const std::vector<Eigen::Vector3
     if (length > max_shift) dr *= max_shift / length;
     shift[i] = dr;
   }
+  if (taylor) carry_velocities(in, shift, velocities);
   double largest = 0.0;
   for (int i = 0; i < n; ++i) {
     positions_out[i] += shift[i];

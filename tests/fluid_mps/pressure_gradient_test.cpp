@@ -254,14 +254,52 @@ TEST(MpsPressureGradient, ShiftingMovesAwayFromCrowding) {
   std::vector<Eigen::Vector3d> velocity(b.positions.size(), Eigen::Vector3d(0.5, 0.0, 0.0));
   std::vector<Eigen::Vector3d> out = b.positions;
   const GradientInput in = b.input(2, radius_over_l0, l0);
-  const double largest = shift_particles(in, velocity, unknown, 2.0, dt, l0, 0.1 * l0, out);
+  const double largest = shift_particles(in, velocity, unknown, 2.0, dt, l0, 0.1 * l0, false, out);
   EXPECT_LT(out[moved].x(), b.positions[moved].x());  // back to the left
   EXPECT_GT(largest, 0.0);
   EXPECT_LE(largest, 0.1 * l0 * (1 + 1e-12));
   EXPECT_EQ(out[top], b.positions[top]);
   std::vector<Eigen::Vector3d> rest(b.positions.size(), Eigen::Vector3d::Zero());
   out = b.positions;
-  EXPECT_EQ(shift_particles(in, rest, unknown, 2.0, dt, l0, 0.1 * l0, out), 0.0);
+  EXPECT_EQ(shift_particles(in, rest, unknown, 2.0, dt, l0, 0.1 * l0, false, out), 0.0);
+}
+
+// With taylor, a shifted particle takes the flow's velocity at its new place: in a linear
+// velocity field (a shear and a stretch) on a disordered block, u_i + J_i dr_i equals the field
+// at the shifted position to round-off; without it the velocity stays (and misses it by
+// the shift times the gradient, the brink error of free_overfall, docs/validation.md).
+TEST(MpsPressureGradient, ShiftedParticlesCarryTheLinearFlowsVelocity) {
+  const double l0 = 0.01, radius_over_l0 = 2.1, dt = 1e-3;
+  Block b = block(2, 16, 16, l0, 0.2, radius_over_l0 * l0, 9);
+  b.pressure.assign(b.positions.size(), 0.0);
+  const std::vector<int> unknown(b.positions.size(), 0);
+  auto flow = [](const Eigen::Vector3d& x) {
+    return Eigen::Vector3d(0.4 + 3.0 * x.y() + 1.5 * x.x(), -1.5 * x.y(), 0.0);
+  };
+  std::vector<Eigen::Vector3d> kept(b.positions.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) kept[i] = flow(b.positions[i]);
+  std::vector<Eigen::Vector3d> carried = kept;
+  std::vector<Eigen::Vector3d> out_kept = b.positions, out_carried = b.positions;
+  const GradientInput in = b.input(2, radius_over_l0, l0);
+  shift_particles(in, kept, unknown, 2.0, dt, l0, 0.1 * l0, false, out_kept);
+  shift_particles(in, carried, unknown, 2.0, dt, l0, 0.1 * l0, true, out_carried);
+  int shifted = 0;
+  double worst = 0.0, stale = 0.0;
+  for (std::size_t i = 0; i < b.positions.size(); ++i) {
+    if (b.kinds[i] != ParticleKind::fluid) continue;
+    EXPECT_EQ(out_kept[i], out_carried[i]) << i;  // the same shifts
+    if (out_carried[i] == b.positions[i]) {
+      EXPECT_EQ(carried[i], flow(b.positions[i])) << i;
+      continue;
+    }
+    ++shifted;
+    EXPECT_EQ(kept[i], flow(b.positions[i])) << i;
+    worst = std::max(worst, (carried[i] - flow(out_carried[i])).norm());
+    stale = std::max(stale, (kept[i] - flow(out_kept[i])).norm());
+  }
+  EXPECT_GT(shifted, 100);
+  EXPECT_GT(stale, 1e-5);  // the gradient times a shift of up to 1 mm
+  EXPECT_LT(worst, 1e-12);
 }
 
 // A scene's momentum balance closed (issue 16): in a driven periodic channel with a hump of water

@@ -188,6 +188,12 @@ struct MpsParameters {
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
   // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
   double shifting_coefficient = 0.0;
+  // The velocity a shifted particle carries (shift_particles):
+  //  kept:   its own (the fluid's momentum is untouched);
+  //  taylor: u_i + (dr . grad) u_i, the flow's velocity where it now sits (Lind et al. 2012,
+  //          eq. 13; grad u by the corrected MPS gradient), first order, not momentum-conserving.
+  enum class ShiftedVelocity { kept, taylor };
+  ShiftedVelocity shifted_velocity = ShiftedVelocity::kept;
   double runaway_speed = 50.0;  // [m/s]; faster particles stop the run with a StabilityError
   // Lattice of the initial particles of the 3D scene builders (scenes.hpp), on which n0 and
   // lambda are computed (kernels.hpp, lattice_sums).
@@ -228,6 +234,9 @@ inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForm
      {"corrected_interior", MpsParameters::GradientForm::corrected_interior},
      {"corrected_blended", MpsParameters::GradientForm::corrected_blended},
      {"corrected_split", MpsParameters::GradientForm::corrected_split}}};
+inline constexpr scenario::Choices<MpsParameters::ShiftedVelocity, 2> kShiftedVelocities{
+    {{"kept", MpsParameters::ShiftedVelocity::kept},
+     {"taylor", MpsParameters::ShiftedVelocity::taylor}}};
 inline constexpr scenario::Choices<MpsParameters::FillLattice, 2> kFillLattices{
     {{"cubic", MpsParameters::FillLattice::cubic}, {"fcc", MpsParameters::FillLattice::fcc}}};
 
@@ -301,6 +310,10 @@ void visit_parameters(P& p, V& v) {
         .in(Range::between(0.0, 10.0))
         .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),
     p.shifting_coefficient);
+  v(Key("shifted_velocity")
+        .doc("kept (a shifted particle keeps its velocity; momentum conserved) or taylor (it "
+             "takes u + (dr . grad) u at its new place, Lind et al. 2012)"),
+    p.shifted_velocity, kShiftedVelocities);
   v(Key("fill_lattice")
         .doc("3D start lattice: cubic (spacing l0) or fcc (face-centred cubic, l0^3 per "
              "particle, nearest neighbours 1.12 l0); n0 and lambda are taken on it"),

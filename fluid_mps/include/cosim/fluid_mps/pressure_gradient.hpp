@@ -75,14 +75,17 @@ std::vector<Eigen::Vector3d> corrected_gradient(const GradientInput& in,
 // Fickian particle shifting (Lind, Xu, Stansby & Rogers 2012, J. Comput. Phys. 231; after Xu,
 // Stansby & Laurence 2009): dr_i = -D grad C_i with D = A l0 |u_i| dt and grad C_i the MPS
 // gradient of the particle concentration, d/n0 sum_j r_ij / |r_ij|^2 w_ij over every neighbour
-// (walls and dummies count). It moves particles from crowded to sparse places; velocities are not
-// interpolated to the new position, so the fluid's momentum is untouched. Fluid particles on the
-// free surface (pressure_unknown[i] < 0: no pressure unknown) or with such a particle within the
-// radius are not shifted (Lind et al. shift those along the surface only; here they keep their
-// place). Each shift is capped at `max_shift` [m]. Returns the largest shift [m].
-double shift_particles(const GradientInput& in, const std::vector<Eigen::Vector3d>& velocities,
+// (walls and dummies count). It moves particles from crowded to sparse places. With `taylor`
+// false the velocities are left as they are, so the fluid's momentum is untouched; with it each
+// shifted particle takes u_i + J_i dr_i, J_i = sum_j w_ij (u_j - u_i) r_ij^T / |r_ij|^2 C_i (the
+// corrected gradient of the velocity over the non-dummy neighbours, exact for a linear field;
+// all J_i from the velocities before any change). Fluid particles on the free surface
+// (pressure_unknown[i] < 0: no pressure unknown) or with such a particle within the radius are
+// not shifted (Lind et al. shift those along the surface only; here they keep their place). Each
+// shift is capped at `max_shift` [m]. Returns the largest shift [m].
+double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& velocities,
                        const std::vector<int>& pressure_unknown, double coefficient, double dt,
-                       double particle_spacing, double max_shift,
+                       double particle_spacing, double max_shift, bool taylor,
                        std::vector<Eigen::Vector3d>& positions_out);
 
 }  // namespace cosim::mps
