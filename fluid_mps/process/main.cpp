@@ -408,12 +408,14 @@ class FluidProcess final : public coupler::Solver {
           std::max(largest_solid_fraction_, system_->largest_solid_fraction());
       impulses_.solids += step.external_impulse;
       budget_sources_ += step.body_impulse + step.wall_viscous_force * (window.dt / pieces) +
-                         step.collision_impulse + step.pressure_impulse + step.external_impulse;
+                         step.collision_impulse + step.pressure_impulse + step.external_impulse +
+                         step.shifting_impulse;
       budget_scale_ += step.body_impulse.norm() + step.external_impulse.norm();
       impulses_.wall_viscous += step.wall_viscous_force * (window.dt / pieces);
       impulses_.wall_collision += step.wall_collision_impulse;
       impulses_.wall_pressure += step.wall_pressure_impulse;
       impulses_.fluid_pressure += step.pressure_impulse - step.wall_pressure_impulse;
+      impulses_.shifting += step.shifting_impulse;
       if (open_boundaries_) open_boundaries_->update();
       if (std::isfinite(config_.scene.outlet_x)) {
         // The momentum the leaving water carries off is booked, so the budget still closes.

@@ -245,6 +245,7 @@ void ReferenceTracker::report(coupler::MetricsReport& report) const {
     const double bed_pressure = -per_area(b.wall_pressure, a.wall_pressure);
     const double bed_stress = bed_viscous + bed_collision + bed_pressure;
     const double internal = per_area(b.fluid_pressure, a.fluid_pressure);
+    const double shifting = per_area(b.shifting, a.shifting);
     // What the fluid gained itself over the averaging time (zero once the flow is steady).
     const double acceleration = (momentum_end_ - momentum_start_).x() / span / period_length_;
     report.compare("canopy_drag_per_bed_area", canopy_drag, driving - bed_stress - acceleration,
@@ -257,8 +258,9 @@ void ReferenceTracker::report(coupler::MetricsReport& report) const {
     report.info()["bed_stress_pressure"] = bed_pressure;
     // Fluid-fluid pressure forces that do not cancel, and what no term explains (should be ~0).
     report.info()["pressure_non_conservation_per_bed_area"] = internal;
+    report.info()["shifting_gain_per_bed_area"] = shifting;
     report.info()["unexplained_per_bed_area"] =
-        acceleration - (driving - canopy_drag - bed_stress + internal);
+        acceleration - (driving - canopy_drag - bed_stress + internal + shifting);
     report.info()["driving_per_bed_area"] = driving;
     report.info()["bed_stress"] = bed_stress;
     nlohmann::json mean_profile = nlohmann::json::array();

@@ -22,6 +22,7 @@ struct FluidImpulses {
   Eigen::Vector3d wall_collision = Eigen::Vector3d::Zero();  // collision model against walls
   Eigen::Vector3d wall_pressure = Eigen::Vector3d::Zero();   // pressure gradient of walls
   Eigen::Vector3d fluid_pressure = Eigen::Vector3d::Zero();  // fluid-fluid: non-conservation
+  Eigen::Vector3d shifting = Eigen::Vector3d::Zero();        // shifted_velocity: taylor's gain
 };
 
 // A time series with its measured reference curve, in SI units, for the output file.

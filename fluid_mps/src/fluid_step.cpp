@@ -471,9 +471,16 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     find_near_pairs(position_star_, c.re_n);
     in.radius = c.re_n;
     in.n0 = c.n0_n;
+    const bool taylor = p.shifted_velocity == MpsParameters::ShiftedVelocity::taylor;
+    if (taylor) unshifted_velocity_ = velocity_star_;
     shift_particles(in, velocity_star_, unknown_, p.shifting_coefficient, c.dt, p.particle_spacing,
-                    0.1 * p.particle_spacing,
-                    p.shifted_velocity == MpsParameters::ShiftedVelocity::taylor, position_star_);
+                    0.1 * p.particle_spacing, taylor, position_star_);
+    if (taylor) {
+      for (int id = 0; id < n; ++id) {  // particle order: the same bits always
+        const int i = rank_[id];
+        report.shifting_impulse += particle_mass_ * (velocity_star_[i] - unshifted_velocity_[i]);
+      }
+    }
   }
 }
 

@@ -307,11 +307,15 @@ TEST(MpsPressureGradient, ShiftedParticlesCarryTheLinearFlowsVelocity) {
 // (viscous, collision and pressure impulses booked by the step), to round-off, with the
 // symmetric_normal_wall gradient and particle shifting: the fluid-fluid pressure forces cancel
 // and shifting moves particles without touching their momentum.
-TEST(MpsPressureGradient, NormalWallGradientClosesAChannelsMomentumBalance) {
+namespace {
+// The channel of NormalWallGradientClosesAChannelsMomentumBalance with the shifted particles'
+// velocities kept or carried (taylor: its gain is booked as shifting_impulse, nonzero).
+void expect_channel_momentum_balance(MpsParameters::ShiftedVelocity carried) {
   const double length = 0.2, depth = 0.06, l0 = 0.01;
   MpsParameters p = cosim::mps::testing::quiet_parameters(l0);
   p.gradient_form = MpsParameters::GradientForm::symmetric_normal_wall;
   p.shifting_coefficient = 2.0;
+  p.shifted_velocity = carried;
   p.periodic.driving_pressure_drop = 50.0;
   ParticleSet set = periodic_channel(p, length, depth);
   for (int iy = 0; iy < 4; ++iy)
@@ -320,13 +324,15 @@ TEST(MpsPressureGradient, NormalWallGradientClosesAChannelsMomentumBalance) {
               ParticleKind::fluid);
   FluidSystem system(p, set);
   const Eigen::Vector3d start = system.total_fluid_momentum();
-  Eigen::Vector3d booked = Eigen::Vector3d::Zero(), fluid_fluid = Eigen::Vector3d::Zero();
+  Eigen::Vector3d booked = Eigen::Vector3d::Zero(), fluid_fluid = Eigen::Vector3d::Zero(),
+                  shifting = Eigen::Vector3d::Zero();
   double magnitude = 0.0;
   for (int k = 0; k < 400; ++k) {
     const double dt = 5e-4;
     const StepReport r = system.step(dt);
     booked += r.body_impulse + r.external_impulse + r.wall_viscous_force * dt +
-              r.wall_collision_impulse + r.wall_pressure_impulse;
+              r.wall_collision_impulse + r.wall_pressure_impulse + r.shifting_impulse;
+    shifting += r.shifting_impulse;
     fluid_fluid += r.pressure_impulse - r.wall_pressure_impulse;
     magnitude += r.pressure_impulse.norm() + r.body_impulse.norm();
   }
@@ -337,6 +343,20 @@ TEST(MpsPressureGradient, NormalWallGradientClosesAChannelsMomentumBalance) {
   EXPECT_LT(fluid_fluid.norm(), 1e-12 * magnitude);
   EXPECT_LT((change - booked).norm(), 1e-12 * magnitude);
   EXPECT_GT(change.x(), 0.0);  // the drive accelerates the water
+  if (carried == MpsParameters::ShiftedVelocity::kept) {
+    EXPECT_EQ(shifting.norm(), 0.0);
+  } else {
+    EXPECT_GT(shifting.norm(), 1e-9 * magnitude);  // taylor moves momentum that no force gave
+  }
+}
+}  // namespace
+
+TEST(MpsPressureGradient, NormalWallGradientClosesAChannelsMomentumBalance) {
+  for (const auto carried :
+       {MpsParameters::ShiftedVelocity::kept, MpsParameters::ShiftedVelocity::taylor}) {
+    SCOPED_TRACE(carried == MpsParameters::ShiftedVelocity::kept ? "kept" : "taylor");
+    expect_channel_momentum_balance(carried);
+  }
 }
 
 namespace {
