@@ -58,8 +58,7 @@ class SurfaceHeights {
     smooth(surfaces());
   }
 
-  // p_b and its gradient at x.
-  // With `trust_out`, p_b and its gradient without S, and S apart (see the header).
+  // p_b and its gradient at x, and the trust S of its column apart (see the header).
   void background(const Eigen::Vector3d& x, double& pressure, Eigen::Vector3d& gradient,
                   double& trust) const {
     pressure = 0.0;

@@ -287,8 +287,9 @@ void gradient_at(Form form, const GradientInput& in, int i, const std::vector<do
 }
 
 // u_i += J_i dr_i at every shifted particle (shift_particles), J_i the corrected velocity
-// gradient; every J_i from the velocities before the change, so the result does not depend on
-// the order (or the thread count).
+// gradient (corrected_gradient's sum for a vector field, taken at the shifted particles only);
+// every J_i from the velocities before the change, so the result does not depend on the order
+// (or the thread count).
 void carry_velocities(const GradientInput& in, const std::vector<Eigen::Vector3d>& shift,
                       std::vector<Eigen::Vector3d>& velocities) {
   const NeighbourList& list = *in.neighbours;
