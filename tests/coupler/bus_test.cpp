@@ -139,6 +139,28 @@ TEST(Bus, LostLastReportIsRecoveredWithinMilliseconds) {
   EXPECT_GE(sender.counters().resends_served, 1);
 }
 
+// The injected loss takes the partner's data, not whatever arrives first: another run's message
+// (or a beacon) heard between drop_next and the report used to take it, and the report then came
+// through with no gap to find (a CI flake of the test above).
+TEST(Bus, InjectedLossSkipsOtherRunsMessages) {
+  Bus sender(slow_fallback(options("sender", 12)));
+  Bus receiver(slow_fallback(options("receiver", 12)));
+  Bus other_run(options("sender", 1012));
+  sender.publish_status(Stamp{1, 0.0, 0.1}, report_with({{"positions", pattern(3)}}));
+  ASSERT_TRUE(receive(receiver, sender, {"sender", 1, "positions"}, 5.0).has_value());
+  receiver.drop_next(1);
+  other_run.publish_status(Stamp{7, 0.0, 0.1}, report_with({{"positions", pattern(2)}}));
+  for (int i = 0; i < 200 && receiver.counters().dropped_foreign == 0; ++i) receiver.poll(0.005);
+  ASSERT_GT(receiver.counters().dropped_foreign, 0) << "the other run's report was not heard";
+  EXPECT_EQ(receiver.counters().dropped_injected, 0);
+  sender.publish_status(Stamp{2, 0.1, 0.1}, report_with({{"positions", pattern(4)}}));
+  const auto received = receive(receiver, sender, {"sender", 2, "positions"}, 5.0);
+  ASSERT_TRUE(received.has_value());
+  EXPECT_EQ(*received, pattern(4));
+  EXPECT_EQ(receiver.counters().dropped_injected, 1);
+  EXPECT_EQ(receiver.counters().gaps_detected, 1);
+}
+
 // A chunk lost inside a burst is seen missing as soon as the next chunk arrives.
 TEST(Bus, GapInAChunkedFieldIsRequestedAtOnce) {
   Bus sender(slow_fallback(options("sender", 11)));
@@ -155,7 +177,10 @@ TEST(Bus, GapInAChunkedFieldIsRequestedAtOnce) {
   EXPECT_EQ(*received, values);
   EXPECT_LT(took, 0.5 * kSlowResendInterval) << "waited for the resend interval, not the gap";
   EXPECT_EQ(receiver.counters().gaps_detected, 1);
-  EXPECT_EQ(receiver.counters().dropped_duplicate, 0) << "only the lost chunk is sent again";
+  // Only the lost chunk is sent again. On a loaded machine the answer can outlast the
+  // retransmission timeout and be asked for twice: each copy then was asked for.
+  EXPECT_LT(receiver.counters().dropped_duplicate, receiver.counters().resends_requested)
+      << "chunks came again that nobody asked for";
 }
 
 TEST(Bus, ForeignRunsAreIgnored) {

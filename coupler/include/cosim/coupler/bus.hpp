@@ -140,7 +140,9 @@ class Bus {
   // When we last accepted any message from a sender (steady clock).
   std::optional<std::chrono::steady_clock::time_point> last_heard(const std::string& sender) const;
 
-  // Drops the next `count` messages received, as a lossy network would (tests).
+  // Drops the next `count` data messages (window, status, field) of this run from other
+  // participants, as a lossy network would (tests). Beacons, resend requests and other runs'
+  // messages pass.
   void drop_next(int count) { drop_next_ += count; }
 
   // Extra names this bus publishes as and therefore ignores when heard back (replay driver).
@@ -205,6 +207,8 @@ class Bus {
 
   void on_message(const lcm::ReceiveBuffer* buffer, const std::string& channel);
   bool check_run(const cosim_msgs::header_t& header);
+  // A window, status or field message of this run from another participant (drop_next's target).
+  bool carries_partner_data(const lcm::ReceiveBuffer* buffer, const std::string& channel) const;
   bool accept_sequenced(const cosim_msgs::header_t& header);
   void on_status(cosim_msgs::status_t status, bool fresh);
   void on_field(const cosim_msgs::field_chunk_t& chunk);
