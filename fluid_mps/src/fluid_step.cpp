@@ -473,8 +473,15 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     in.n0 = c.n0_n;
     const bool taylor = p.shifted_velocity == MpsParameters::ShiftedVelocity::taylor;
     if (taylor) unshifted_velocity_ = velocity_star_;
-    shift_particles(in, velocity_star_, unknown_, p.shifting_coefficient, c.dt, p.particle_spacing,
-                    0.1 * p.particle_spacing, taylor, position_star_);
+    ShiftingOptions shifting;
+    shifting.coefficient = p.shifting_coefficient;
+    shifting.dt = c.dt;
+    shifting.particle_spacing = p.particle_spacing;
+    shifting.max_shift = 0.1 * p.particle_spacing;
+    shifting.taylor = taylor;
+    shifting.tangential_at_walls =
+        p.shifting_near_walls == MpsParameters::ShiftingNearWalls::tangential;
+    shift_particles(in, velocity_star_, unknown_, shifting, position_star_);
     if (taylor) {
       for (int id = 0; id < n; ++id) {  // particle order: the same bits always
         const int i = rank_[id];

@@ -340,8 +340,7 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
 }
 
 double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& velocities,
-                       const std::vector<int>& pressure_unknown, double coefficient, double dt,
-                       double particle_spacing, double max_shift, bool taylor,
+                       const std::vector<int>& pressure_unknown, const ShiftingOptions& options,
                        std::vector<Eigen::Vector3d>& positions_out) {
   const NeighbourList& list = *in.neighbours;
   const auto& kinds = *in.kinds;
@@ -354,23 +353,31 @@ double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& ve
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || on_surface(i)) continue;
     Eigen::Vector3d concentration_gradient = Eigen::Vector3d::Zero();
+    Eigen::Vector3d wall_gradient = Eigen::Vector3d::Zero();
     bool near_surface = false;
     for (std::int64_t k = in.begin(i); k < in.end(i); ++k) {
       const int j = list.index[k];
       const double r = list.distance[k];
       if (r >= in.radius || is_inactive(kinds[j])) continue;
       near_surface = near_surface || on_surface(j);
-      concentration_gradient +=
+      const Eigen::Vector3d term =
           gradient_pair_term(1.0, r, in.radius, in.periodic->wrap(x[j] - x[i]));
+      concentration_gradient += term;
+      if (!is_fluid(kinds[j])) wall_gradient += term;
     }
     if (near_surface) continue;
-    const double diffusion = coefficient * particle_spacing * velocities[i].norm() * dt;  // [m^2]
+    const double diffusion = options.coefficient * options.particle_spacing * velocities[i].norm() *
+                             options.dt;  // [m^2]
     Eigen::Vector3d dr = -diffusion * factor * concentration_gradient;
+    if (options.tangential_at_walls && wall_gradient.squaredNorm() > 0.0) {
+      const Eigen::Vector3d normal = wall_gradient.normalized();
+      dr -= dr.dot(normal) * normal;
+    }
     const double length = dr.norm();
-    if (length > max_shift) dr *= max_shift / length;
+    if (length > options.max_shift) dr *= options.max_shift / length;
     shift[i] = dr;
   }
-  if (taylor) carry_velocities(in, shift, velocities);
+  if (options.taylor) carry_velocities(in, shift, velocities);
   double largest = 0.0;
   for (int i = 0; i < n; ++i) {
     positions_out[i] += shift[i];

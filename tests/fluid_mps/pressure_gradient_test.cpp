@@ -237,6 +237,18 @@ TEST(MpsPressureGradient, NormalWallPushesAlongTheNormalOnly) {
   EXPECT_NEAR(wall[moved].y(), symmetric_wall.y(), 1e-12 * std::abs(symmetric_wall.y()));
 }
 
+// The step's shifting: A = 2, each shift capped at 0.1 l0.
+ShiftingOptions shifting(double dt, double l0, bool taylor, bool tangential_at_walls = false) {
+  ShiftingOptions options;
+  options.coefficient = 2.0;
+  options.dt = dt;
+  options.particle_spacing = l0;
+  options.max_shift = 0.1 * l0;
+  options.taylor = taylor;
+  options.tangential_at_walls = tangential_at_walls;
+  return options;
+}
+
 // Shifting moves a particle pushed towards a neighbour back towards the middle of the gap, and
 // not at all at rest or on the free surface.
 TEST(MpsPressureGradient, ShiftingMovesAwayFromCrowding) {
@@ -254,14 +266,63 @@ TEST(MpsPressureGradient, ShiftingMovesAwayFromCrowding) {
   std::vector<Eigen::Vector3d> velocity(b.positions.size(), Eigen::Vector3d(0.5, 0.0, 0.0));
   std::vector<Eigen::Vector3d> out = b.positions;
   const GradientInput in = b.input(2, radius_over_l0, l0);
-  const double largest = shift_particles(in, velocity, unknown, 2.0, dt, l0, 0.1 * l0, false, out);
+  const double largest = shift_particles(in, velocity, unknown, shifting(dt, l0, false), out);
   EXPECT_LT(out[moved].x(), b.positions[moved].x());  // back to the left
   EXPECT_GT(largest, 0.0);
   EXPECT_LE(largest, 0.1 * l0 * (1 + 1e-12));
   EXPECT_EQ(out[top], b.positions[top]);
   std::vector<Eigen::Vector3d> rest(b.positions.size(), Eigen::Vector3d::Zero());
   out = b.positions;
-  EXPECT_EQ(shift_particles(in, rest, unknown, 2.0, dt, l0, 0.1 * l0, false, out), 0.0);
+  EXPECT_EQ(shift_particles(in, rest, unknown, shifting(dt, l0, false), out), 0.0);
+}
+
+// Beside a bed, full shifting lifts the crowded first row off the wall into the faster water of
+// a shear flow, and with taylor that lift is momentum no force gave (rigid_canopy's balance,
+// docs/validation.md). tangential_at_walls removes the shift across the wall: the first rows
+// keep their height and gain nothing, and particles out of the walls' reach shift as before.
+TEST(MpsPressureGradient, TangentialShiftingNeverLiftsParticlesOffAWall) {
+  const double l0 = 0.01, radius_over_l0 = 2.1, dt = 1e-3;
+  const int columns = 16;
+  Block b = block(2, columns, 12, l0, 0.0, radius_over_l0 * l0, 1);
+  auto row_of = [&](int i) { return static_cast<int>(std::lround(b.positions[i].y() / l0)); };
+  for (std::size_t i = 0; i < b.positions.size(); ++i) {
+    if (b.kinds[i] == ParticleKind::fluid && row_of(i) == 0) b.positions[i].y() -= 0.3 * l0;
+  }
+  const int sideways = (3 + 5) * columns + 8;  // row 5, out of the walls' reach
+  b.positions[sideways].x() += 0.3 * l0;
+  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius_over_l0 * l0), radius_over_l0 * l0);
+  grid.build(b.positions);
+  b.list = grid.neighbours(b.positions, radius_over_l0 * l0);
+  b.pressure.assign(b.positions.size(), 0.0);
+  const std::vector<int> unknown(b.positions.size(), 0);
+  auto shear = [](const Eigen::Vector3d& x) { return Eigen::Vector3d(0.5 + 20.0 * x.y(), 0, 0); };
+  std::vector<Eigen::Vector3d> before(b.positions.size());
+  for (std::size_t i = 0; i < before.size(); ++i) before[i] = shear(b.positions[i]);
+  const GradientInput in = b.input(2, radius_over_l0, l0);
+  std::vector<Eigen::Vector3d> full_u = before, slide_u = before;
+  std::vector<Eigen::Vector3d> full = b.positions, slide = b.positions;
+  shift_particles(in, full_u, unknown, shifting(dt, l0, true), full);
+  shift_particles(in, slide_u, unknown, shifting(dt, l0, true, true), slide);
+  Eigen::Vector3d full_gain = Eigen::Vector3d::Zero(), slide_gain = Eigen::Vector3d::Zero();
+  int lifted = 0;
+  for (std::size_t i = 0; i < b.positions.size(); ++i) {
+    if (b.kinds[i] != ParticleKind::fluid) continue;
+    const int column = static_cast<int>(i) % columns;
+    if (row_of(i) >= 2) {  // no wall within the radius (2.1 l0): the same bits
+      EXPECT_EQ(slide[i], full[i]) << i;
+      EXPECT_EQ(slide_u[i], full_u[i]) << i;
+      continue;
+    }
+    if (column < 3 || column > columns - 4) continue;  // the block's open sides tilt grad C
+    if (full[i].y() - b.positions[i].y() > 1e-3 * l0) ++lifted;
+    EXPECT_NEAR(slide[i].y(), b.positions[i].y(), 1e-12 * l0) << i;
+    full_gain += full_u[i] - before[i];
+    slide_gain += slide_u[i] - before[i];
+  }
+  EXPECT_GE(lifted, 10) << "the crowded first row is lifted by full shifting";
+  EXPECT_GT(full_gain.x(), 1e-3) << "and gains the faster water's momentum";
+  EXPECT_LT(slide_gain.norm(), 1e-12) << "tangential: no lift, no gain";
+  EXPECT_GT((full[sideways] - b.positions[sideways]).norm(), 1e-3 * l0);
 }
 
 // With taylor, a shifted particle takes the flow's velocity at its new place: in a linear
@@ -281,8 +342,8 @@ TEST(MpsPressureGradient, ShiftedParticlesCarryTheLinearFlowsVelocity) {
   std::vector<Eigen::Vector3d> carried = kept;
   std::vector<Eigen::Vector3d> out_kept = b.positions, out_carried = b.positions;
   const GradientInput in = b.input(2, radius_over_l0, l0);
-  shift_particles(in, kept, unknown, 2.0, dt, l0, 0.1 * l0, false, out_kept);
-  shift_particles(in, carried, unknown, 2.0, dt, l0, 0.1 * l0, true, out_carried);
+  shift_particles(in, kept, unknown, shifting(dt, l0, false), out_kept);
+  shift_particles(in, carried, unknown, shifting(dt, l0, true), out_carried);
   int shifted = 0;
   double worst = 0.0, stale = 0.0;
   for (std::size_t i = 0; i < b.positions.size(); ++i) {

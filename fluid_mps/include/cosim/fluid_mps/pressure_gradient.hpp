@@ -79,13 +79,22 @@ std::vector<Eigen::Vector3d> corrected_gradient(const GradientInput& in,
 // false the velocities are left as they are, so the fluid's momentum is untouched; with it each
 // shifted particle takes u_i + J_i dr_i, J_i = sum_j w_ij (u_j - u_i) r_ij^T / |r_ij|^2 C_i (the
 // corrected gradient of the velocity over the non-dummy neighbours, exact for a linear field;
-// all J_i from the velocities before any change). Fluid particles on the free surface
+// all J_i from the velocities before any change). With `tangential_at_walls` the shift loses its
+// component along n_w, the direction of the wall and dummy neighbours' share of grad C_i (a
+// particle beside a wall slides along it). Fluid particles on the free surface
 // (pressure_unknown[i] < 0: no pressure unknown) or with such a particle within the radius are
 // not shifted (Lind et al. shift those along the surface only; here they keep their place). Each
 // shift is capped at `max_shift` [m]. Returns the largest shift [m].
+struct ShiftingOptions {
+  double coefficient = 2.0;       // A
+  double dt = 0.0;                // [s]
+  double particle_spacing = 0.0;  // l0 [m]
+  double max_shift = 0.0;         // [m]
+  bool taylor = false;
+  bool tangential_at_walls = false;
+};
 double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& velocities,
-                       const std::vector<int>& pressure_unknown, double coefficient, double dt,
-                       double particle_spacing, double max_shift, bool taylor,
+                       const std::vector<int>& pressure_unknown, const ShiftingOptions& options,
                        std::vector<Eigen::Vector3d>& positions_out);
 
 }  // namespace cosim::mps
