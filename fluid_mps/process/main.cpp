@@ -331,7 +331,14 @@ class FluidProcess final : public coupler::Solver {
     }
     if (blade_.empty()) {
       mps::MpsState state = system_->save_state();
-      blade_ = mps::append_wall_particles(state, solid.positions);
+      // The water stands about l0 off the plate, as against any wall (0.9 l0: a lattice
+      // column half a spacing off the plate goes, the next one, 1.5 l0 off, stays).
+      const auto wall = mps::append_wall_particles(state, solid.positions, 0.9 * l0);
+      blade_ = wall.particles;
+      if (wall.cleared > 0) {
+        spdlog::info("'{}' stands in water: {} fluid particles within 0.9 l0 of it taken out",
+                     solid.name, wall.cleared);
+      }
       system_ = std::make_unique<mps::FluidSystem>(config_.parameters, state);
       if (open_boundaries_) {
         open_boundaries_ = std::make_unique<mps::OpenBoundaries>(*system_, config_.scene.inflow);

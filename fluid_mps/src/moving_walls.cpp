@@ -12,6 +12,8 @@
 // equation, so the load carries the water's inertia (added mass) and the pressure drag of a
 // resolved interface (MPS-FEM: Hwang et al. 2014, J. Fluids Struct.; the partitioned plate of
 // Causin, Gerbeau & Nobile 2005, CMAME 194).
+#include <algorithm>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -79,17 +81,41 @@ std::vector<Eigen::Vector3d> plate_pressure_loads(const FluidSystem& system,
   return loads;
 }
 
-std::vector<int> append_wall_particles(MpsState& state,
-                                       const std::vector<Eigen::Vector3d>& positions) {
-  std::vector<int> indices;
+namespace {
+
+double distance_to_polyline(const Eigen::Vector3d& x, const std::vector<Eigen::Vector3d>& points) {
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Eigen::Vector3d& a = points[k];
+    const Eigen::Vector3d ab = (k + 1 < points.size() ? points[k + 1] : a) - a;
+    const double length2 = ab.squaredNorm();
+    const double t = length2 > 0.0 ? std::clamp((x - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+    nearest = std::min(nearest, (x - (a + t * ab)).norm());
+  }
+  return nearest;
+}
+
+}  // namespace
+
+AppendedWall append_wall_particles(MpsState& state, const std::vector<Eigen::Vector3d>& positions,
+                                   double clearance) {
+  AppendedWall wall;
+  for (std::size_t i = 0; i < state.positions.size(); ++i) {
+    if (state.kinds[i] == ParticleKind::fluid &&
+        distance_to_polyline(state.positions[i], positions) < clearance) {
+      state.kinds[i] = ParticleKind::inactive;
+      state.velocities[i].setZero();
+      ++wall.cleared;
+    }
+  }
   for (const auto& x : positions) {
-    indices.push_back(static_cast<int>(state.positions.size()));
+    wall.particles.push_back(static_cast<int>(state.positions.size()));
     state.positions.push_back(x);
     state.velocities.push_back(Eigen::Vector3d::Zero());
     state.pressures.push_back(0.0);
     state.kinds.push_back(ParticleKind::wall);
   }
-  return indices;
+  return wall;
 }
 
 }  // namespace cosim::mps

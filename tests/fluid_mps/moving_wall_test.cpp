@@ -27,8 +27,9 @@ struct Plate {
 
 // A vertical plate of `count` particles `spacing` apart from (x, y0) upwards, appended to the
 // tank on a lattice line between two fluid columns; the fluid particles of those two columns
-// along the plate are taken out (inactive), so that the water stands about l0 off the plate
-// as it would against any wall. Returns the plate; `removed` counts the particles taken out.
+// along the plate are taken out (append_wall_particles, 0.9 l0), so that the water stands about l0
+// off the plate as it would against any wall. Returns the plate; `removed` counts the particles
+// taken out.
 Plate add_plate(MpsState& state, double x, double y0, int count, double spacing, double l0,
                 int& removed);
 
@@ -43,19 +44,11 @@ Plate add_flat_plate(MpsState& state, double x0, double y, int count, double spa
 
 Plate add_plate(MpsState& state, double x, double y0, int count, double spacing, double l0,
                 int& removed) {
-  const double y1 = y0 + (count - 1) * spacing;
-  removed = 0;
-  for (std::size_t i = 0; i < state.positions.size(); ++i) {
-    const Eigen::Vector3d& r = state.positions[i];
-    if (state.kinds[i] == ParticleKind::fluid && std::abs(r.x() - x) < 0.9 * l0 &&
-        r.y() > y0 - l0 && r.y() < y1 + l0) {
-      state.kinds[i] = ParticleKind::inactive;
-      ++removed;
-    }
-  }
   std::vector<Eigen::Vector3d> points;
   for (int k = 0; k < count; ++k) points.emplace_back(x, y0 + k * spacing, 0.0);
-  return Plate{append_wall_particles(state, points)};
+  const AppendedWall wall = append_wall_particles(state, points, 0.9 * l0);
+  removed = wall.cleared;
+  return Plate{wall.particles};
 }
 
 // Moves the plate's partitions to its particles and steps; returns the load [N/m] of the step.
