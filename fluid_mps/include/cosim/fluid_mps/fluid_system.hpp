@@ -287,6 +287,8 @@ std::vector<Eigen::Vector3d> plate_pressure_loads(const FluidSystem& system,
 // inactive. (A plate set between two lattice columns half a spacing away crowds them to several
 // times n0, and the pressure throws them out: a blade standing in still water at t = 0 sent
 // particles off at 6 m/s within 6 ms.) Solids given before the water is there clear nothing.
+// Distances are straight, not across a periodic seam: a plant within `clearance` of a seam
+// leaves the water on the seam's far side in place.
 struct AppendedWall {
   std::vector<int> particles;  // indices of the new wall particles, in the order of `positions`
   int cleared = 0;             // fluid particles made inactive
