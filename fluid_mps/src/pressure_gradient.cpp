@@ -363,7 +363,7 @@ double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& ve
       const Eigen::Vector3d term =
           gradient_pair_term(1.0, r, in.radius, in.periodic->wrap(x[j] - x[i]));
       concentration_gradient += term;
-      if (!is_fluid(kinds[j])) wall_gradient += term;
+      if (options.tangential_at_walls && !is_fluid(kinds[j])) wall_gradient += term;
     }
     if (near_surface) continue;
     const double diffusion = options.coefficient * options.particle_spacing * velocities[i].norm() *
