@@ -5,7 +5,7 @@
 //       writes the initial particles ("kind x y z", kind 1 fluid, 2 wall, 3 dummy) and the
 //       domain box, which the script turns into MPS-Basic's input;
 //   bench_fluid_mps_compare --cells-per-width N [--warmup-steps 200] [--steps 200]
-//       [--dt S] [--tolerance 1e-8] [--preconditioner automatic|amg|jacobi|ic]
+//       [--dt S] [--tolerance 1e-8] [--preconditioner automatic|amg|jacobi|ic|aggregation]
 //       [--radii RN,RG,RL] [--surface-threshold 0.97] [--gravity 9.81]
 //       runs warmup + timed steps of dt and prints one JSON line: particles, steps, CPU seconds
 //       of the timed steps (process clock), wall seconds, mean PCG iterations per timed step,
@@ -63,7 +63,7 @@ struct Options {
   std::cerr << "bench_fluid_mps_compare: " << message
             << "\nusage: bench_fluid_mps_compare --cells-per-width N [--write-start FILE | "
                "[--warmup-steps W] [--steps M] [--dt S] [--tolerance T] "
-               "[--preconditioner automatic|amg|jacobi|ic] [--radii RN,RG,RL] "
+               "[--preconditioner automatic|amg|jacobi|ic|aggregation] [--radii RN,RG,RL] "
                "[--surface-threshold B] [--gravity G]]\n";
   std::exit(2);
 }
@@ -111,6 +111,7 @@ MpsParameters::PressurePreconditioner preconditioner(const std::string& name) {
   if (name == "amg") return P::amg;
   if (name == "jacobi") return P::jacobi;
   if (name == "ic") return P::incomplete_cholesky;
+  if (name == "aggregation") return P::aggregation;
   usage("unknown preconditioner " + name);
 }
 

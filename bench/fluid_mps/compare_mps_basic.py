@@ -304,7 +304,7 @@ def main():
     ap.add_argument("--steps", type=int, default=200, help="timed steps per run")
     ap.add_argument("--tolerance", type=float, default=1e-8)
     ap.add_argument("--preconditioner", default="automatic",
-                    choices=["automatic", "amg", "jacobi", "ic"], help="fluid_mps' PCG")
+                    choices=["automatic", "amg", "jacobi", "ic", "aggregation"], help="fluid_mps' PCG")
     ap.add_argument("--native-tolerance", action="store_true",
                     help="also time MPS-Basic at its own tolerance (Eigen default, 2.2e-16)")
     ap.add_argument("--check", action="store_true", help="first check that mps_basic_driver "

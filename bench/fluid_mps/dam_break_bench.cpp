@@ -18,6 +18,9 @@ void BM_DamBreakStep(benchmark::State& state) {
   p.particle_spacing = a / cells_per_width;
   p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
   p.pressure_preconditioner = static_cast<MpsParameters::PressurePreconditioner>(state.range(1));
+  if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
+    p.multigrid_radius_over_l0 = std::atof(radius);  // for sweeps of the hierarchy radius
+  }
   FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
   // Skip the start-up so the column is collapsing (typical PCG work) when timing begins.
   while (system.time() < 0.05) system.step(system.stable_dt());
@@ -37,9 +40,10 @@ void BM_DamBreakStep(benchmark::State& state) {
   state.counters["mean_unknowns"] = static_cast<double>(unknowns) / steps;
 }
 
-// Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi, 2 incomplete Cholesky, 3 automatic).
+// Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi, 2 incomplete Cholesky, 3 automatic,
+// 4 aggregation).
 BENCHMARK(BM_DamBreakStep)
-    ->ArgsProduct({{10, 20, 40, 80}, {0, 1}})
+    ->ArgsProduct({{10, 20, 40, 80}, {0, 1, 4}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(200)
     ->UseRealTime();
@@ -86,9 +90,9 @@ void BM_Column3dStep(benchmark::State& state) {
   state.counters["mean_unknowns"] = static_cast<double>(unknowns) / steps;
 }
 
-// Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi).
+// Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi, 4 aggregation).
 BENCHMARK(BM_Column3dStep)
-    ->ArgsProduct({{8, 12, 16}, {0, 1}})
+    ->ArgsProduct({{8, 12, 16}, {0, 1, 4}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(40)
     ->UseRealTime();

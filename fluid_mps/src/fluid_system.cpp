@@ -108,6 +108,9 @@ void FluidSystem::initialise() {
     case Kind::amg:
       pressure_solver_ = PressureSolver(Preconditioner::amg);
       break;
+    case Kind::aggregation:
+      pressure_solver_ = PressureSolver(Preconditioner::aggregation);
+      break;
     case Kind::automatic:
       pressure_solver_ = PressureSolver(Preconditioner::automatic,
                                         p.dimension == 3 ? kAmgFromUnknowns3d : kAmgFromUnknowns);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "aggregation_preconditioner.hpp"
 #include "amg_preconditioner.hpp"
 
 namespace cosim::mps {
@@ -288,6 +289,10 @@ struct PressureSolver::Amg {
   AmgPreconditioner cycle;
 };
 
+struct PressureSolver::Aggregation {
+  AggregationPreconditioner two_level;
+};
+
 PressureSolver::PressureSolver(Preconditioner preconditioner, int amg_from_unknowns)
     : preconditioner_(preconditioner), amg_from_unknowns_(amg_from_unknowns) {}
 PressureSolver::~PressureSolver() = default;
@@ -306,6 +311,14 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
   }
   if (preconditioner_ == Preconditioner::incomplete_cholesky) {
     return solve_incomplete_cholesky(matrix, rhs, x, tolerance, max_iterations);
+  }
+  if (preconditioner_ == Preconditioner::aggregation) {
+    if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
+    aggregation_->two_level.setup(matrix);
+    return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, nullptr,
+                               [&](const std::vector<double>& r, std::vector<double>& z) {
+                                 aggregation_->two_level.apply(r, z);
+                               });
   }
   if (uses_amg(n)) {
     if (!amg_) amg_ = std::make_unique<Amg>();

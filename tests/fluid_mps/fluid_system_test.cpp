@@ -208,7 +208,8 @@ TEST(MpsFluidSystem, RunawaySpeedThrowsStabilityError) {
 // sums must not depend on either (partners in index order, one hierarchy per step).
 TEST(MpsFluidSystem, RestartFromFileContinuesBitForBit) {
   for (auto preconditioner : {MpsParameters::PressurePreconditioner::automatic,
-                              MpsParameters::PressurePreconditioner::amg}) {
+                              MpsParameters::PressurePreconditioner::amg,
+                              MpsParameters::PressurePreconditioner::aggregation}) {
     MpsParameters p = dam_parameters(8);
     p.pressure_preconditioner = preconditioner;
     FluidSystem straight(p, dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715));
@@ -236,8 +237,9 @@ TEST(MpsFluidSystem, SameBitsWithOneAndTwoThreads) {
   const ParticleSet set = dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715);
   ASSERT_GT(set.size(), 4096u);
   const int threads = omp_get_max_threads();
-  for (auto preconditioner : {MpsParameters::PressurePreconditioner::jacobi,
-                              MpsParameters::PressurePreconditioner::amg}) {
+  for (auto preconditioner :
+       {MpsParameters::PressurePreconditioner::jacobi, MpsParameters::PressurePreconditioner::amg,
+        MpsParameters::PressurePreconditioner::aggregation}) {
     p.pressure_preconditioner = preconditioner;
     FluidSystem one(p, set), two(p, set);
     omp_set_num_threads(1);

@@ -13,59 +13,16 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/operators.hpp"
 #include "cosim/fluid_mps/pressure_solver.hpp"
+#include "laplacian_fixture.hpp"
 
 using namespace cosim::mps;
+using namespace cosim::mps::test;
 
 namespace {
-
-// Square (2D) or cubic (3D) lattice of side `count` particles and spacing l0 from the origin.
-std::vector<Eigen::Vector3d> lattice(int dimension, int count, double l0) {
-  std::vector<Eigen::Vector3d> points;
-  for (int z = 0; z < (dimension == 3 ? count : 1); ++z)
-    for (int y = 0; y < count; ++y)
-      for (int x = 0; x < count; ++x) points.emplace_back(x * l0, y * l0, z * l0);
-  return points;
-}
-
-Eigen::AlignedBox3d box_of(const std::vector<Eigen::Vector3d>& points, double margin) {
-  Eigen::AlignedBox3d box;
-  for (const auto& p : points) box.extend(p);
-  return Eigen::AlignedBox3d(box.min().array() - margin, box.max().array() + margin);
-}
 
 int centre_index(int dimension, int count) {
   const int c = count / 2;
   return dimension == 3 ? (c * count + c) * count + c : c * count + c;
-}
-
-// The MPS Laplacian matrix of the particles `inside` selects (their row numbers in `row_of`, -1
-// outside; the others are p = 0 boundaries): diagonal sum w, off-diagonal -w to inside partners.
-template <class Inside>
-SparseRows kernel_laplacian(const NeighbourList& list, std::size_t particles, double radius,
-                            Inside inside, std::vector<int>& row_of) {
-  row_of.assign(particles, -1);
-  int rows = 0;
-  for (std::size_t i = 0; i < particles; ++i) {
-    if (inside(static_cast<int>(i))) row_of[i] = rows++;
-  }
-  SparseRows a;
-  for (std::size_t i = 0; i < particles; ++i) {
-    if (row_of[i] < 0) continue;
-    const int particle = static_cast<int>(i);
-    const std::size_t diagonal = a.column.size();
-    a.column.push_back(row_of[i]);
-    a.value.push_back(0.0);
-    for (int k = list.begin(particle); k < list.end(particle); ++k) {
-      const double w = weight(list.distance[k], radius);
-      a.value[diagonal] += w;
-      if (row_of[list.index[k]] >= 0) {
-        a.column.push_back(row_of[list.index[k]]);
-        a.value.push_back(-w);
-      }
-    }
-    a.offset.push_back(static_cast<std::int64_t>(a.column.size()));
-  }
-  return a;
 }
 
 }  // namespace

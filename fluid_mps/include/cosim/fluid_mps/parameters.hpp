@@ -108,7 +108,7 @@ struct MpsParameters {
   // the dam break, against 30-200 with jacobi) but costs a hierarchy set-up every step, which
   // only pays from about 4500 unknowns on in 2D; automatic takes jacobi below that and amg
   // above (3D: from 200 000 unknowns, pressure_solver.hpp).
-  enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic };
+  enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic, aggregation };
   PressurePreconditioner pressure_preconditioner = PressurePreconditioner::automatic;
   // The products of the CG iterations read the matrix values rounded to float: 6 instead of 10
   // bytes an entry, for a product bound by reading the matrix. Changes the bits of the pressure
@@ -224,11 +224,12 @@ struct MpsParameters {
   std::vector<PartitionSegment> partitions;
 };
 
-inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 4> kPreconditioners{
+inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 5> kPreconditioners{
     {{"automatic", MpsParameters::PressurePreconditioner::automatic},
      {"amg", MpsParameters::PressurePreconditioner::amg},
      {"jacobi", MpsParameters::PressurePreconditioner::jacobi},
-     {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky}}};
+     {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky},
+     {"aggregation", MpsParameters::PressurePreconditioner::aggregation}}};
 inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
     {{"mixed", MpsParameters::SourceTerm::mixed}, {"density", MpsParameters::SourceTerm::density}}};
 inline constexpr scenario::Choices<MpsParameters::PressureBackground, 2> kPressureBackgrounds{

@@ -30,7 +30,10 @@ struct PcgResult {
 // hierarchy kept between steps would make a restarted run differ from an uninterrupted one.
 // automatic: jacobi below kAmgFromUnknowns unknowns, amg from there on (a choice made from the
 // system alone, so runs and restarts stay bit-identical).
-enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic };
+// aggregation: Jacobi plus an exact solve on aggregates of strongly connected unknowns
+// (aggregation_preconditioner.hpp); iterations stay about constant with the resolution at the
+// cost of about one extra pass over the matrix a solve, all of it our own code.
+enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic, aggregation };
 
 // Measured crossover of one-thread step cost on the 2D dam break (BM_DamBreakStep, CPU time,
 // alternating runs; docs/performance.md), with the interleaved CG product: Jacobi / AMG step time
@@ -94,10 +97,12 @@ class PressureSolver {
   }
 
  private:
-  struct Amg;  // hypre objects; the header includes no hypre or MPI header
+  struct Amg;          // hypre objects; the header includes no hypre or MPI header
+  struct Aggregation;  // the two-level preconditioner (Eigen's sparse Cholesky inside)
   Preconditioner preconditioner_;
   int amg_from_unknowns_;
   std::unique_ptr<Amg> amg_;
+  std::unique_ptr<Aggregation> aggregation_;
   CgWork work_;
   std::vector<double> inverse_diagonal_;
 };
