@@ -47,7 +47,7 @@ BENCHMARK(BM_DamBreakStep)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(200)
     ->UseRealTime();
-// Sizes around the 2D switch point of the automatic preconditioner (kAmgFromUnknowns).
+// Sizes between a/l0 = 20 and 80 (the crossovers of the preconditioners, docs/performance.md).
 BENCHMARK(BM_DamBreakStep)
     ->ArgsProduct({{24, 28, 32, 36, 48, 56, 64}, {0, 1}})
     ->Unit(benchmark::kMillisecond)

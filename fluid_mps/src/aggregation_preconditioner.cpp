@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include <omp.h>
+
 namespace cosim::mps {
 
 namespace {
@@ -21,6 +23,7 @@ double diagonal_of(const SparseRows& m, int row) {
 bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength) {
   const int n = matrix.rows();
   inverse_diagonal_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     const double diagonal = diagonal_of(matrix, i);
     inverse_diagonal_[i] = diagonal > 0.0 ? 1.0 / diagonal : 1.0;
@@ -90,38 +93,51 @@ void AggregationPreconditioner::build_aggregates(const SparseRows& m, double str
   for (int i = 0; i < n; ++i) ++member_offset_[aggregate_[i] + 1];
   for (int a = 0; a < count; ++a) member_offset_[a + 1] += member_offset_[a];
   member_.resize(n);
-  slot_of_.assign(member_offset_.begin(), member_offset_.end() - 1);
-  for (int i = 0; i < n; ++i) member_[slot_of_[aggregate_[i]]++] = i;
+  member_cursor_.assign(member_offset_.begin(), member_offset_.end() - 1);
+  for (int i = 0; i < n; ++i) member_[member_cursor_[aggregate_[i]]++] = i;
 }
 
-// A_c = P^T A P: coarse row I sums the rows of its members, each entry into the column of its
-// unknown's aggregate, in row and entry order (the same bits for any thread count).
+// A_c = P^T A P: coarse column a sums the rows of its members, each entry into the row of its
+// unknown's aggregate, in row and entry order, so each coarse entry has the same bits for any
+// thread count; threads take contiguous ranges of aggregates, and the triplets (one per entry)
+// give the same matrix in any order.
 void AggregationPreconditioner::build_coarse_matrix(const SparseRows& m) {
   const int count = aggregate_count_;
-  slot_of_.assign(count, -1);
-  touched_.clear();
-  row_sum_.clear();
-  lower_.clear();
-  for (int a = 0; a < count; ++a) {
-    touched_.clear();
-    row_sum_.clear();
-    for (int t = member_offset_[a]; t < member_offset_[a + 1]; ++t) {
-      const int i = member_[t];
-      for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-        const int b = aggregate_[m.column[k]];
-        if (b < a) continue;  // the factorisation reads the lower triangle (column a, rows b >= a)
-        if (slot_of_[b] < 0) {
-          slot_of_[b] = static_cast<int>(touched_.size());
-          touched_.push_back(b);
-          row_sum_.push_back(0.0);
+  const int threads = m.rows() >= 4096 ? std::max(1, omp_get_max_threads()) : 1;
+  if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
+#pragma omp parallel num_threads(threads)
+  {
+    const int thread = omp_get_thread_num(), team = omp_get_num_threads();
+    Scratch& s = scratch_[thread];
+    s.slot_of.assign(count, -1);
+    s.lower.clear();
+    const int first = static_cast<int>(static_cast<std::int64_t>(count) * thread / team);
+    const int last = static_cast<int>(static_cast<std::int64_t>(count) * (thread + 1) / team);
+    for (int a = first; a < last; ++a) {
+      s.touched.clear();
+      s.row_sum.clear();
+      for (int t = member_offset_[a]; t < member_offset_[a + 1]; ++t) {
+        const int i = member_[t];
+        for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+          const int b = aggregate_[m.column[k]];
+          if (b < a) continue;  // the factorisation reads the lower triangle (rows b >= a)
+          if (s.slot_of[b] < 0) {
+            s.slot_of[b] = static_cast<int>(s.touched.size());
+            s.touched.push_back(b);
+            s.row_sum.push_back(0.0);
+          }
+          s.row_sum[s.slot_of[b]] += m.value[k];
         }
-        row_sum_[slot_of_[b]] += m.value[k];
+      }
+      for (std::size_t k = 0; k < s.touched.size(); ++k) {
+        s.lower.emplace_back(s.touched[k], a, s.row_sum[k]);
+        s.slot_of[s.touched[k]] = -1;
       }
     }
-    for (std::size_t s = 0; s < touched_.size(); ++s) {
-      lower_.emplace_back(touched_[s], a, row_sum_[s]);
-      slot_of_[touched_[s]] = -1;
-    }
+  }
+  lower_.clear();
+  for (int t = 0; t < threads; ++t) {
+    lower_.insert(lower_.end(), scratch_[t].lower.begin(), scratch_[t].lower.end());
   }
   coarse_.resize(count, count);
   coarse_.setFromTriplets(lower_.begin(), lower_.end());

@@ -44,8 +44,13 @@ class AggregationPreconditioner {
   std::vector<double> inverse_diagonal_;
   std::vector<int> aggregate_;               // aggregate of each row
   std::vector<int> member_offset_, member_;  // rows of each aggregate, in row order
-  std::vector<int> touched_, slot_of_;       // coarse assembly: columns seen in the current row
-  std::vector<double> row_sum_;
+  std::vector<int> member_cursor_;
+  struct Scratch {                      // one per thread of the coarse assembly
+    std::vector<int> touched, slot_of;  // coarse rows seen in the current column, their slots
+    std::vector<double> row_sum;
+    std::vector<Eigen::Triplet<double>> lower;
+  };
+  std::vector<Scratch> scratch_;
   std::vector<Eigen::Triplet<double>> lower_;  // coarse entries on and below the diagonal
   int aggregate_count_ = 0;
   bool factored_ = false;

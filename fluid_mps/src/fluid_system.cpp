@@ -112,8 +112,9 @@ void FluidSystem::initialise() {
       pressure_solver_ = PressureSolver(Preconditioner::aggregation);
       break;
     case Kind::automatic:
-      pressure_solver_ = PressureSolver(Preconditioner::automatic,
-                                        p.dimension == 3 ? kAmgFromUnknowns3d : kAmgFromUnknowns);
+      pressure_solver_ =
+          PressureSolver(Preconditioner::automatic,
+                         p.dimension == 3 ? kAggregationFromUnknowns3d : kAggregationFromUnknowns);
       break;
   }
   pressure_solver_.set_single_precision_product(p.single_precision_product);

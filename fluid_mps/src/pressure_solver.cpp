@@ -293,8 +293,8 @@ struct PressureSolver::Aggregation {
   AggregationPreconditioner two_level;
 };
 
-PressureSolver::PressureSolver(Preconditioner preconditioner, int amg_from_unknowns)
-    : preconditioner_(preconditioner), amg_from_unknowns_(amg_from_unknowns) {}
+PressureSolver::PressureSolver(Preconditioner preconditioner, int aggregation_from_unknowns)
+    : preconditioner_(preconditioner), aggregation_from_unknowns_(aggregation_from_unknowns) {}
 PressureSolver::~PressureSolver() = default;
 PressureSolver::PressureSolver(PressureSolver&&) noexcept = default;
 PressureSolver& PressureSolver::operator=(PressureSolver&&) noexcept = default;
@@ -312,7 +312,8 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
   if (preconditioner_ == Preconditioner::incomplete_cholesky) {
     return solve_incomplete_cholesky(matrix, rhs, x, tolerance, max_iterations);
   }
-  if (preconditioner_ == Preconditioner::aggregation) {
+  const Preconditioner chosen = preconditioner_for(n);
+  if (chosen == Preconditioner::aggregation) {
     if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
     aggregation_->two_level.setup(matrix);
     return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, nullptr,
@@ -320,7 +321,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
                                  aggregation_->two_level.apply(r, z);
                                });
   }
-  if (uses_amg(n)) {
+  if (chosen == Preconditioner::amg) {
     if (!amg_) amg_ = std::make_unique<Amg>();
     amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
     return conjugate_gradients(

@@ -136,9 +136,11 @@ TEST(Fishway, PeriodicPoolSeesItsNeighbourPoolsAcrossTheSeam) {
   EXPECT_NEAR(gauges.discharge(0), 0.0, 1e-15);
 }
 
-// Two coarse pools fed at q = 0.01 m^2/s for 1.5 s: stable, the particle count is conserved
+// Two coarse pools fed at q = 0.01 m^2/s for 2 s: stable, the particle count is conserved
 // (fluid = initial + released - recycled), water passes both crests, and the weir gauge of the
-// first weir sees a positive discharge.
+// first weir sees a positive discharge. (By 1.5 s the first particle only just reaches the
+// outlet: 1 with jacobi and amg, 0 with aggregation; by 2 s 12 / 10 / 8, with crest discharges
+// within 1.2 % of each other.)
 TEST(Fishway, CoarseRunPassesWaterOverTheWeirs) {
   const double l0 = 0.01;
   MpsParameters p = quiet_parameters(l0);
@@ -161,7 +163,7 @@ TEST(Fishway, CoarseRunPassesWaterOverTheWeirs) {
     return count;
   };
   const int initial = fluid_count();
-  while (system.time() < 1.5) {
+  while (system.time() < 2.0) {
     system.step(system.stable_dt());
     boundaries.update();
     if (system.time() > 0.5) gauges.record(system);

@@ -103,11 +103,11 @@ struct MpsParameters {
   double max_dt = 1e-3;           // user upper bound [s]
   double pcg_tolerance = 1e-8;    // relative residual |b - A p| / |b|
   int pcg_max_iterations = 2000;
-  // Preconditioner of the pressure conjugate gradients (pressure_solver.hpp): amg keeps the
-  // iterations about constant as the resolution grows (12-13 per step from a/l0 = 10 to 80 on
-  // the dam break, against 30-200 with jacobi) but costs a hierarchy set-up every step, which
-  // only pays from about 4500 unknowns on in 2D; automatic takes jacobi below that and amg
-  // above (3D: from 200 000 unknowns, pressure_solver.hpp).
+  // Preconditioner of the pressure conjugate gradients (pressure_solver.hpp): aggregation and
+  // amg keep the iterations about constant as the resolution grows (22-30 and 12-13 per step
+  // from a/l0 = 10 to 80 on the dam break, against 30-200 with jacobi); aggregation's set-up is
+  // the cheaper. automatic takes jacobi for small systems and aggregation above (1 000 unknowns
+  // in 2D, 10 000 in 3D; pressure_solver.hpp).
   enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic, aggregation };
   PressurePreconditioner pressure_preconditioner = PressurePreconditioner::automatic;
   // The products of the CG iterations read the matrix values rounded to float: 6 instead of 10
@@ -293,7 +293,8 @@ void visit_parameters(P& p, V& v) {
     p.pcg_tolerance);
   v(Key("pcg_max_iterations").in(Range::between(1, 1e7)).doc("pressure CG iterations per step"),
     p.pcg_max_iterations);
-  v(Key("pressure_preconditioner").doc("automatic: jacobi for small, amg for large systems"),
+  v(Key("pressure_preconditioner")
+        .doc("automatic: jacobi for small, aggregation for large systems"),
     p.pressure_preconditioner, kPreconditioners);
   v(Key("single_precision_product").doc("CG products read float matrix values (changes the bits)"),
     p.single_precision_product);

@@ -28,23 +28,21 @@ struct PcgResult {
 // symmetric Gauss-Seidel smoothing) per iteration; iterations stay about constant with the
 // resolution. The hierarchy is built for every solve: the matrix changes as particles move, and a
 // hierarchy kept between steps would make a restarted run differ from an uninterrupted one.
-// automatic: jacobi below kAmgFromUnknowns unknowns, amg from there on (a choice made from the
-// system alone, so runs and restarts stay bit-identical).
 // aggregation: Jacobi plus an exact solve on aggregates of strongly connected unknowns
-// (aggregation_preconditioner.hpp); iterations stay about constant with the resolution at the
-// cost of about one extra pass over the matrix a solve, all of it our own code.
+// (aggregation_preconditioner.hpp); iterations stay about constant with the resolution (22-30 a
+// step) for a set-up of about two passes over the matrix, all of it our own code.
+// automatic: jacobi below aggregation_from_unknowns unknowns, aggregation from there on (a
+// choice made from the system alone, so runs and restarts stay bit-identical).
 enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic, aggregation };
 
-// Measured crossover of one-thread step cost on the 2D dam break (BM_DamBreakStep, CPU time,
-// alternating runs; docs/performance.md), with the interleaved CG product: Jacobi / AMG step time
-// 0.64-1.15 (mean 0.92) at 3 800 unknowns (a/l0 = 40), 1.04-1.08 at 5 300 (48), 1.41 at 7 100
-// (56) and 1.13 at 9 100 (64); below 3 800 Jacobi wins. The ratio crosses 1 near 4 600.
-constexpr int kAmgFromUnknowns = 4500;
-// 3D (radius 3.1 l0): Jacobi was 1.2 times faster than AMG at every size measured (9.7 k to
-// 37.6 k particles), its iterations growing as N^(1/3) (33 to 58); at that rate they reach
-// about 120 near 300 k unknowns, where the AMG step (9-10 iterations) is expected to win. The
-// switch point is that extrapolation, not a measurement.
-constexpr int kAmgFromUnknowns3d = 200000;
+// Where `automatic` switches from jacobi to aggregation, from the one-thread step cost of the
+// dam breaks (BM_DamBreakStep, BM_Column3dStep: three alternating rounds, sums of CPU time,
+// docs/performance.md). 2D (radius 4 l0): aggregation / jacobi 0.99 at 350 unknowns (a/l0 =
+// 10), 0.75 at 1 100 (20), 0.67 at 3 800 (40), 0.43 at 14 000 (80). 3D (radius 3.1 l0): 0.97
+// at 3 200 unknowns (a/l0 = 8), 1.03 at 8 100 (12), 0.78 at 16 100 (16). AMG (hypre) took
+// 1.5-2.2 times aggregation's step at every 2D size, so automatic no longer takes it.
+constexpr int kAggregationFromUnknowns = 1000;
+constexpr int kAggregationFromUnknowns3d = 10000;
 
 // y = A x; each row summed in the order of its entries (the bits of the plain loop). With
 // `single_precision`, each value is first rounded to float (the bits of the plain loop over
@@ -73,7 +71,7 @@ struct CgWork {
 class PressureSolver {
  public:
   explicit PressureSolver(Preconditioner preconditioner = Preconditioner::amg,
-                          int amg_from_unknowns = kAmgFromUnknowns);
+                          int aggregation_from_unknowns = kAggregationFromUnknowns);
   ~PressureSolver();
   PressureSolver(PressureSolver&&) noexcept;
   PressureSolver& operator=(PressureSolver&&) noexcept;
@@ -90,17 +88,20 @@ class PressureSolver {
   // bits of the solution (docs/performance.md, single-precision product).
   void set_single_precision_product(bool on) { work_.single_precision = on; }
   bool single_precision_product() const { return work_.single_precision; }
-  // Whether a system of `rows` unknowns is preconditioned by multigrid.
-  bool uses_amg(int rows) const {
-    return preconditioner_ == Preconditioner::amg ||
-           (preconditioner_ == Preconditioner::automatic && rows >= amg_from_unknowns_);
+  // The preconditioner a system of `rows` unknowns gets (automatic resolved).
+  Preconditioner preconditioner_for(int rows) const {
+    if (preconditioner_ != Preconditioner::automatic) return preconditioner_;
+    return rows >= aggregation_from_unknowns_ ? Preconditioner::aggregation
+                                              : Preconditioner::jacobi;
   }
+  // Whether a system of `rows` unknowns is preconditioned by hypre's multigrid.
+  bool uses_amg(int rows) const { return preconditioner_for(rows) == Preconditioner::amg; }
 
  private:
   struct Amg;          // hypre objects; the header includes no hypre or MPI header
   struct Aggregation;  // the two-level preconditioner (Eigen's sparse Cholesky inside)
   Preconditioner preconditioner_;
-  int amg_from_unknowns_;
+  int aggregation_from_unknowns_;
   std::unique_ptr<Amg> amg_;
   std::unique_ptr<Aggregation> aggregation_;
   CgWork work_;
