@@ -33,9 +33,6 @@ class AggregationPreconditioner {
   bool setup(const SparseRows& matrix, double strength = kAggregationStrength);
   // z = D^-1 r + P A_c^-1 P^T r.
   void apply(const std::vector<double>& r, std::vector<double>& z);
-  int aggregates() const { return aggregate_count_; }
-  const std::vector<int>& aggregate_of_row() const { return aggregate_; }
-  const std::vector<double>& inverse_diagonal() const { return inverse_diagonal_; }
 
  private:
   void build_aggregates(const SparseRows& matrix, double strength);
