@@ -7,27 +7,8 @@
 
 namespace cosim::mps {
 
-namespace {
-
-// Padding entries of a row (value 0 on the diagonal's column) are summed into the diagonal.
-double diagonal_of(const SparseRows& m, int row) {
-  double diagonal = 0.0;
-  for (std::int64_t k = m.offset[row]; k < m.offset[row + 1]; ++k) {
-    if (m.column[k] == row) diagonal += m.value[k];
-  }
-  return diagonal;
-}
-
-}  // namespace
-
 bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength) {
-  const int n = matrix.rows();
-  inverse_diagonal_.resize(n);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    const double diagonal = diagonal_of(matrix, i);
-    inverse_diagonal_[i] = diagonal > 0.0 ? 1.0 / diagonal : 1.0;
-  }
+  invert_diagonal(matrix, inverse_diagonal_);
   build_aggregates(matrix, strength);
   build_coarse_matrix(matrix);
   factor_.compute(coarse_);

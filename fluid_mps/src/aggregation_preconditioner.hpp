@@ -5,8 +5,9 @@
 // & Brezina 1996, "Algebraic multigrid by smoothed aggregation", without the smoothing of P; the
 // additive two-level form as in Toselli & Widlund 2005, ch. 3). The coarse space carries the
 // smooth error that makes Jacobi's iterations grow with resolution, so CG's iterations stay
-// about constant (docs/performance.md). Everything here is serial and in row order, so the
-// result does not depend on the thread count.
+// about constant (docs/performance.md). Every sum runs in row order (the coarse assembly splits
+// the aggregates over threads, each coarse entry summed by one of them), so the result does not
+// depend on the thread count.
 #pragma once
 
 #include <Eigen/SparseCholesky>

@@ -328,14 +328,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
         matrix, rhs, x, tolerance, max_iterations, work_, nullptr,
         [&](const std::vector<double>& r, std::vector<double>& z) { amg_->cycle.apply(r, z); });
   }
-  inverse_diagonal_.assign(n, 1.0);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
-      if (matrix.column[k] == i && matrix.value[k] > 0.0)
-        inverse_diagonal_[i] = 1.0 / matrix.value[k];
-    }
-  }
+  invert_diagonal(matrix, inverse_diagonal_);
   const std::vector<double>& inverse_diagonal = inverse_diagonal_;
   return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, &inverse_diagonal,
                              [&](const std::vector<double>& r, std::vector<double>& z) {
@@ -344,6 +337,19 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
 #pragma omp parallel for schedule(static) if (size >= 4096)
                                for (int i = 0; i < size; ++i) z[i] = inverse_diagonal[i] * r[i];
                              });
+}
+
+void invert_diagonal(const SparseRows& matrix, std::vector<double>& inverse) {
+  const int n = matrix.rows();
+  inverse.resize(n);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    double diagonal = 0.0;
+    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
+      if (matrix.column[k] == i) diagonal += matrix.value[k];
+    }
+    inverse[i] = diagonal > 0.0 ? 1.0 / diagonal : 1.0;
+  }
 }
 
 void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y,

@@ -39,23 +39,6 @@ SparseRows disordered_laplacian(int dimension, int side, int ring, double radius
   return kernel_laplacian(list, points.size(), radius, inside, row_of);
 }
 
-std::vector<double> varying_rhs(int rows) {
-  std::vector<double> b(rows);
-  for (int i = 0; i < rows; ++i) b[i] = 1.0 + 0.5 * std::sin(0.37 * i);
-  return b;
-}
-
-double largest_difference(const std::vector<double>& x, const std::vector<double>& y,
-                          double& largest) {
-  double difference = 0.0;
-  largest = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    largest = std::max(largest, std::abs(y[i]));
-    difference = std::max(difference, std::abs(x[i] - y[i]));
-  }
-  return difference;
-}
-
 }  // namespace
 
 // 2D (radius 4 l0, as the 2D scenes) on 20^2 to 160^2 unknowns and 3D (radius 3.1 l0) on 12^3

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "cosim/fluid_mps/kernels.hpp"
@@ -54,6 +56,25 @@ SparseRows kernel_laplacian(const NeighbourList& list, std::size_t particles, do
     a.offset.push_back(static_cast<std::int64_t>(a.column.size()));
   }
   return a;
+}
+
+// A right-hand side that varies from row to row (not an eigenvector of a lattice Laplacian).
+inline std::vector<double> varying_rhs(int rows) {
+  std::vector<double> b(rows);
+  for (int i = 0; i < rows; ++i) b[i] = 1.0 + 0.5 * std::sin(0.37 * i);
+  return b;
+}
+
+// The largest |x_i - y_i|; `largest` gets the largest |y_i| (the scale to compare it with).
+inline double largest_difference(const std::vector<double>& x, const std::vector<double>& y,
+                                 double& largest) {
+  double difference = 0.0;
+  largest = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    largest = std::max(largest, std::abs(y[i]));
+    difference = std::max(difference, std::abs(x[i] - y[i]));
+  }
+  return difference;
 }
 
 }  // namespace cosim::mps::test

@@ -206,11 +206,8 @@ TEST(MpsPressureSolver, MultigridIterationsDoNotGrowWithResolution) {
     std::vector<double> y(rows, 0.0);
     const PcgResult jacobi = solve_pcg(a, b, y, 1e-8, 2000, Preconditioner::jacobi);
     EXPECT_TRUE(jacobi.converged);
-    double largest = 0.0, difference = 0.0;
-    for (int i = 0; i < rows; ++i) {
-      largest = std::max(largest, std::abs(y[i]));
-      difference = std::max(difference, std::abs(x[i] - y[i]));
-    }
+    double largest = 0.0;
+    const double difference = largest_difference(x, y, largest);
     EXPECT_LT(difference, 1e-6 * largest) << side;  // the same solution
     std::cout << "[multigrid] " << rows << " unknowns: amg " << amg.iterations << ", jacobi "
               << jacobi.iterations << " iterations\n";
@@ -314,8 +311,7 @@ TEST(MpsPressureSolver, SinglePrecisionProductConvergesToTheDoubleSolution) {
   std::vector<int> row_of;
   const SparseRows a = kernel_laplacian(list, points.size(), radius, inside, row_of);
   const int rows = a.rows();
-  std::vector<double> b(rows);
-  for (int i = 0; i < rows; ++i) b[i] = 1.0 + 0.5 * std::sin(0.37 * i);
+  const std::vector<double> b = varying_rhs(rows);
   std::vector<double> x_double(rows, 0.0), x_single(rows, 0.0);
   PressureSolver double_solver(Preconditioner::jacobi), single_solver(Preconditioner::jacobi);
   single_solver.set_single_precision_product(true);

@@ -50,6 +50,10 @@ constexpr int kAggregationFromUnknowns3d = 10000;
 void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vector<double>& y,
               bool single_precision = false);
 
+// inverse[i] = 1 / a_ii, the entries on row i's diagonal column summed (as the product sums
+// them; padding entries are zeros there), or 1 where that sum is not positive.
+void invert_diagonal(const SparseRows& matrix, std::vector<double>& inverse);
+
 // Solves A x = b from the initial guess in x. Stops when |r| <= tolerance |b|. The Krylov loop is
 // our own, parallel, with dot products summed in fixed blocks, so the result is identical for
 // any thread count (the AMG cycle and incomplete Cholesky run on one thread).
