@@ -22,8 +22,12 @@ function(cosim_add_gtest)
   else()
     add_test(NAME ${T_NAME} COMMAND ${T_NAME})
   endif()
+  # Tests share the cores (ctest -j): solver threads sleep at once while they wait
+  # (docs/performance.md, "How the threads wait"); tests that set their own ENVIRONMENT say
+  # so too.
   set_tests_properties(${T_NAME} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}"
-                       WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
+                       WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}
+                       ENVIRONMENT "OMP_WAIT_POLICY=passive")
 endfunction()
 
 set(COSIM_SHARED_REFERENCES "${CMAKE_SOURCE_DIR}/references" CACHE PATH "Validation reference data")

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include "plot_support.hpp"
 #include "progress.hpp"
 #include "sweep.hpp"
+#include "thread_wait.hpp"
 
 namespace cosim::testing {
 namespace {
@@ -290,6 +292,43 @@ TEST(QuickStart, InstallCommandUsesSudoWhereThereIsOne) {
     EXPECT_EQ(calls.find("sudo cmake"), std::string::npos) << calls;
     EXPECT_EQ(calls.find("sudo cosim"), std::string::npos) << calls;
   }
+}
+
+// The solvers' threads spin briefly, then sleep, unless the user chose how they wait.
+TEST(ThreadWait, BoundedSpinUnlessTheUserChoseAWait) {
+  using tool::thread_wait_settings;
+  const auto none = [](const char*) -> const char* { return nullptr; };
+  const auto settings = thread_wait_settings(none);
+  ASSERT_EQ(settings.size(), 2u);
+  EXPECT_EQ(settings[0].name, "OMP_WAIT_POLICY");
+  EXPECT_EQ(settings[0].value, "passive");
+  EXPECT_EQ(settings[1].name, "GOMP_SPINCOUNT");
+  EXPECT_EQ(settings[1].value, "10000");
+  for (const char* chosen : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT"}) {
+    SCOPED_TRACE(chosen);
+    const auto user = [chosen](const char* name) -> const char* {
+      return std::string(name) == chosen ? "passive" : nullptr;
+    };
+    EXPECT_TRUE(thread_wait_settings(user).empty());
+  }
+}
+
+TEST(ThreadWait, SetsTheEnvironmentTheSolversInherit) {
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  const char* spin = std::getenv("GOMP_SPINCOUNT");
+  const std::string saved_policy = policy ? policy : "", saved_spin = spin ? spin : "";
+  unsetenv("OMP_WAIT_POLICY");
+  unsetenv("GOMP_SPINCOUNT");
+  tool::set_thread_wait();
+  EXPECT_STREQ(std::getenv("OMP_WAIT_POLICY"), "passive");
+  EXPECT_STREQ(std::getenv("GOMP_SPINCOUNT"), tool::kBoundedSpinCount);
+  setenv("GOMP_SPINCOUNT", "0", 1);
+  tool::set_thread_wait();  // a chosen wait stays
+  EXPECT_STREQ(std::getenv("GOMP_SPINCOUNT"), "0");
+  unsetenv("OMP_WAIT_POLICY");
+  unsetenv("GOMP_SPINCOUNT");
+  if (policy) setenv("OMP_WAIT_POLICY", saved_policy.c_str(), 1);
+  if (spin) setenv("GOMP_SPINCOUNT", saved_spin.c_str(), 1);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "cosim/coupler/process_main.hpp"
 #include "network.hpp"
 #include "sweep.hpp"
+#include "thread_wait.hpp"
 
 namespace cosim::tool {
 
@@ -48,6 +49,7 @@ void join_run(const JoinRequest& request) {
   std::vector<char*> arguments;
   for (auto& word : words) arguments.push_back(word.data());
   arguments.push_back(nullptr);
+  set_thread_wait();  // as `cosim run` does for the processes it starts
   execv(arguments[0], arguments.data());
   throw std::runtime_error(
       fmt::format("cannot start {}: {}", executable.string(), std::strerror(errno)));

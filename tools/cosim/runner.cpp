@@ -27,6 +27,7 @@
 #include "cosim/output/files.hpp"
 #include "progress.hpp"
 #include "run_summary.hpp"
+#include "thread_wait.hpp"
 
 namespace cosim::tool {
 
@@ -228,9 +229,7 @@ void run_participants(const scenario::Scene& scene, const RunRequest& request,
   }
   const auto bin = coupler::executable_dir();
   const auto resolved_file = outcome.run_dir / "scenario.yaml";
-  // Solvers share the machine with each other: OpenMP threads that spin while waiting would
-  // steal the cores their partners compute on (docs/performance.md, fluid_mps).
-  setenv("OMP_WAIT_POLICY", "passive", 0);
+  set_thread_wait();
   for (const auto& entry : scene.participants) {
     if (is_remote(request, entry.name)) {
       // Printed and flushed before the handshake waits for it.
