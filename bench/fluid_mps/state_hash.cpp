@@ -1,19 +1,20 @@
 // A fingerprint of a run for changes that must keep the bits: steps the 2D dam break (AMG,
-// Jacobi, the mixed source term) and the 3D column collapse of bench_fluid_mps and prints one
-// line per case with an FNV-1a hash of the bytes of every particle's position, velocity and
-// pressure after the run (and of the number densities of the particles that are not dummies).
-// Built against two commits and run with OMP_NUM_THREADS=1 and 2, equal lines mean equal bits.
-// Also printed, to compare runs that do not keep the bits (argument --single-product: the float
-// CG product): the surge front (largest fluid x), the water height at the back wall (largest
-// fluid height within 2 l0 of the smallest fluid x) and the mean fluid pressure. The 2D open
-// channel (the soluble moving wall under discharge and level control) hashes its boundaries'
-// released volume and measured level as well.
+// Jacobi, aggregation, the mixed source term) and the 3D column collapse (Jacobi, aggregation)
+// of bench_fluid_mps and prints one line per case with an FNV-1a hash of the bytes of every
+// particle's position, velocity and pressure after the run (and of the number densities of the
+// particles that are not dummies). Built against two commits and run with OMP_NUM_THREADS=1 and 2,
+// equal lines mean equal bits. Also printed, to compare runs that do not keep the bits (argument
+// --single-product: the float CG product): the surge front (largest fluid x), the water height at
+// the back wall (largest fluid height within 2 l0 of the smallest fluid x) and the mean fluid
+// pressure. The 2D open channel (the soluble moving wall under discharge and level control) hashes
+// its boundaries' released volume and measured level as well.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <string>
 
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
@@ -93,12 +94,14 @@ int main(int argc, char** argv) {
   const bool single = argc > 1 && std::strcmp(argv[1], "--single-product") == 0;
   const double a = 0.05715;
   using Pre = MpsParameters::PressurePreconditioner;
-  for (const Pre pre : {Pre::amg, Pre::jacobi}) {
+  const auto name = [](Pre pre) {
+    return pre == Pre::amg ? "AMG" : pre == Pre::jacobi ? "Jacobi" : "aggregation";
+  };
+  for (const Pre pre : {Pre::amg, Pre::jacobi, Pre::aggregation}) {
     MpsParameters p = dam_break_parameters(a / 40, a, 2, single);
     p.pressure_preconditioner = pre;
     FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
-    report(pre == Pre::amg ? "2D dam break a/l0=40 AMG" : "2D dam break a/l0=40 Jacobi", system,
-           150);
+    report(("2D dam break a/l0=40 " + std::string(name(pre))).c_str(), system, 150);
   }
   {
     MpsParameters p = dam_break_parameters(a / 40, a, 2, single);
@@ -107,11 +110,11 @@ int main(int argc, char** argv) {
     FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
     report("2D dam break 40 mixed", system, 150);
   }
-  {
+  for (const Pre pre : {Pre::jacobi, Pre::aggregation}) {
     MpsParameters p = dam_break_parameters(a / 8, a, 3, single);
-    p.pressure_preconditioner = Pre::jacobi;
+    p.pressure_preconditioner = pre;
     FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
-    report("3D column a/l0=8 Jacobi", system, 60);
+    report(("3D column a/l0=8 " + std::string(name(pre))).c_str(), system, 60);
   }
   using Control = OpenBoundarySettings::Control;
   for (const Control control : {Control::discharge, Control::level}) {
