@@ -10,6 +10,7 @@
 #include "cosim/fluid_mps/hydrostatic_background.hpp"
 #include "cosim/fluid_mps/operators.hpp"
 #include "cosim/fluid_mps/pressure_gradient.hpp"
+#include "particle_loops.hpp"
 
 // Loops run in parallel from 4096 items on (the `if` clauses below): under that the OpenMP
 // fork/join costs more than the work, and oversubscribed CI cores make it far worse.
@@ -104,7 +105,7 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   velocity_star_ = u_;
   position_star_ = x_;
   fill(wall_viscous_, n, kZero);
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (is_inactive(kind_[i])) continue;
     double density_sum = 0.0;
@@ -170,7 +171,7 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
   fill(correction_, n, kZero);
   fill(wall_correction_, n, kZero);
   fill(collided_, n, 0);
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kind_[i])) continue;
     auto pair = [&](int j, double r) {
@@ -223,7 +224,7 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   const bool mixed = p.source_term == MpsParameters::SourceTerm::mixed;
   fill(density_star_, n, 0.0);
   fill(divergence_, n, 0.0);
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (fused) find_near_row(i, position_star_, cutoff2, false);
     double sum = 0.0, divergence_sum = 0.0;

@@ -300,21 +300,34 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
   list.radius = radius;
   list.offset.assign(static_cast<std::size_t>(n) + 1, 0);
   list.distance.clear();
-  // Each thread takes a contiguous run of cells holding about 1/threads of the particles and
-  // collects its pairs in its own buffer; segment[i] is where particle i's partners start there.
+  // Each thread takes a contiguous run of cells holding about 1/threads of the rows (with
+  // `rows`, a cell of dummies only is no work: in a long channel the bed's dummies would
+  // otherwise tip the split) and collects its pairs in its own buffer; segment[i] is where
+  // particle i's partners start there. The split decides only who computes a row, not what.
   const int threads = n >= 4096 ? omp_get_max_threads() : 1;
   std::vector<std::vector<int>> block_index(threads);
   std::vector<std::int64_t> segment(n, 0);
   std::vector<int> owner(n, 0);
-  const std::int64_t listed = static_cast<std::int64_t>(sorted_.size());
+  const std::vector<std::int64_t>* row_start = &cell_start_;
+  std::vector<std::int64_t> wanted_start;
+  if (rows && threads > 1) {
+    wanted_start.assign(static_cast<std::size_t>(cell_count) + 1, 0);
+    for (std::int64_t c = 0; c < cell_count; ++c) {
+      std::int64_t wanted = 0;
+      for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s)
+        wanted += static_cast<std::int64_t>(wants_row(sorted_[s]));
+      wanted_start[c + 1] = wanted_start[c] + wanted;
+    }
+    row_start = &wanted_start;
+  }
+  const std::int64_t listed = row_start->back();
 #pragma omp parallel num_threads(threads) if (n >= 4096)
   {
     const int thread = omp_get_thread_num(), count = omp_get_num_threads();
     const auto first_cell = [&](int t) {
-      const std::int64_t particle = listed * t / count;
+      const std::int64_t row = listed * t / count;
       return static_cast<std::int64_t>(
-          std::lower_bound(cell_start_.begin(), cell_start_.end() - 1, particle) -
-          cell_start_.begin());
+          std::lower_bound(row_start->begin(), row_start->end() - 1, row) - row_start->begin());
     };
     const std::int64_t c_begin = first_cell(thread);
     const std::int64_t c_end = thread + 1 == count ? cell_count : first_cell(thread + 1);

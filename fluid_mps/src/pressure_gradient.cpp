@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "cosim/fluid_mps/operators.hpp"
+#include "particle_loops.hpp"
 
 // Loops run in parallel from 4096 items on, as in fluid_step.cpp.
 namespace cosim::mps {
@@ -24,7 +25,7 @@ void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum
   const auto& p = *in.pressure;
   const int n = static_cast<int>(kinds.size());
   minimum.assign(n, 0.0);
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
     double smallest = p[i];
@@ -48,7 +49,7 @@ void wall_normals(const GradientInput& in, std::vector<Eigen::Vector3d>& normal)
   const auto& x = *in.positions;
   const int n = static_cast<int>(kinds.size());
   normal.assign(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int w = 0; w < n; ++w) {
     if (kinds[w] != ParticleKind::wall) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -187,7 +188,7 @@ std::vector<Eigen::Vector3d> corrected_gradient(const GradientInput& in,
                                                 const std::vector<double>& reference) {
   const int n = static_cast<int>(in.kinds->size());
   std::vector<Eigen::Vector3d> result(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!carries_pressure((*in.kinds)[i])) continue;
     const PairSums s = pair_sums(in, i, [&](int j) { return field[j] - reference[i]; });
@@ -297,7 +298,7 @@ void carry_velocities(const GradientInput& in, const std::vector<Eigen::Vector3d
   const auto& x = *in.positions;
   const int n = static_cast<int>(kinds.size());
   std::vector<Eigen::Vector3d> change(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || shift[i].squaredNorm() == 0.0) continue;
     Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
@@ -332,7 +333,7 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
   }
   std::vector<Eigen::Vector3d> normals;
   if (form == Form::symmetric_normal_wall) wall_normals(in, normals);
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (is_fluid(kinds[i]) && (!evaluate || (*evaluate)[i]))
       gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);
@@ -349,7 +350,7 @@ double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& ve
   auto on_surface = [&](int j) { return is_fluid(kinds[j]) && pressure_unknown[j] < 0; };
   std::vector<Eigen::Vector3d> shift(n, Eigen::Vector3d::Zero());
   const double factor = gradient_factor(in.dimension, in.n0);
-#pragma omp parallel for schedule(static) if (n >= 4096)
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || on_surface(i)) continue;
     Eigen::Vector3d concentration_gradient = Eigen::Vector3d::Zero();
