@@ -1,6 +1,7 @@
 // The Newton solve of the implicit sub-step far above the spring-mass step limit (safety_factor
 // up to the 1000 the scenario allows), and what a failure reports.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <cstdio>
@@ -113,6 +114,44 @@ TEST(NewtonFailure, NamesThePlantAndNodeOfTheLargestResidualAndTheKeys) {
     for (const char* key : {"safety_factor", "max_newton_iterations = 1", "newton_tolerance"})
       EXPECT_NE(message.find(key), std::string::npos) << key << ": " << message;
   }
+}
+
+// From 16 plants out of contact on, their Newton iterations run side by side (OpenMP); plants
+// in contact follow in index order. A field of 20 free strips and two touching ones: the same
+// bits with one and two threads. (The free strips are not compared with a field without the
+// pair: the sub-step, its restarts and cutbacks are the field's, so the pair changes them too.)
+TEST(NewtonSideBySide, SameBitsWithOneAndTwoThreads) {
+  std::vector<PlantSpec> specs;
+  for (int k = 0; k < 20; ++k) {
+    PlantSpec blade = strip(1380, 10.0 * (k % 3));
+    blade.base = Eigen::Vector3d(0, 0.01 * k, 0);
+    specs.push_back(blade);
+  }
+  for (int k = 0; k < 2; ++k) {  // 1.5 mm apart: the 2 mm wide strips touch at once
+    PlantSpec blade = strip(1380, 0.0);
+    blade.base = Eigen::Vector3d(0.0015 * k, 0.5, 0);
+    specs.push_back(blade);
+  }
+  const auto run = [&](int threads) {
+    omp_set_num_threads(threads);
+    PlantField field(specs, water(10));
+    const auto flow = testing::uniform(field, Eigen::Vector3d(0.15, 0, 0));
+    for (int window = 0; window < 20; ++window) field.advance(0.005, flow, flow);
+    return field.positions();
+  };
+  const int threads = omp_get_max_threads();
+  const auto one = run(1), two = run(2);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.size(), two.size());
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    for (int d = 0; d < 3; ++d) ASSERT_EQ(one[k][d], two[k][d]) << "node " << k;
+  }
+  // The pair did touch: contact pushed the tips of strips whose bases are 1.5 mm apart apart.
+  const std::size_t nodes = 17, first_of_pair = 20 * nodes;
+  const double tip_gap =
+      (one[first_of_pair + 2 * nodes - 1] - one[first_of_pair + nodes - 1]).norm();
+  std::printf("tips of the touching pair %.3f mm apart\n", 1e3 * tip_gap);
+  EXPECT_GT(tip_gap, 0.0017);
 }
 
 }  // namespace

@@ -205,6 +205,7 @@ StaticReport PlantField::solve_static(double tolerance, int max_iterations) {
   const std::vector<Eigen::Vector3d> still(n, Eigen::Vector3d::Zero());
   const bool contact = parameters_.contact && plant_count() > 1;
   BandedMatrix jacobian;
+  std::vector<double> static_correction;  // scratch of apply_newton_correction
   std::vector<char> converged(plants_.size(), 0);
   std::vector<double> last_correction(plants_.size(), 0.0);
   const auto fail = [&](int plant, int node, const std::string& what) {
@@ -223,7 +224,8 @@ StaticReport PlantField::solve_static(double tolerance, int max_iterations) {
       jacobian.resize(3 * plant.links, 8);
       compute_forces(p, positions_, still, still, contact, forces_, drag_, &jacobian, 1.0, 0.0);
       for (int i = 1; i <= plant.links; ++i) residual_[plant.first + i] = -forces_[plant.first + i];
-      const Correction correction = apply_newton_correction(p, jacobian, residual_, true);
+      const Correction correction =
+          apply_newton_correction(p, jacobian, residual_, true, static_correction);
       if (correction.singular)
         fail(p, correction.node,
              "singular stiffness (a load that buckles the plant, or a plant with no bending "

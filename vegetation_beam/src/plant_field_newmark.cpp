@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include <omp.h>
+
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
@@ -19,6 +21,9 @@ constexpr double kGamma = 0.5;
 constexpr int kHalfBandwidth = 8;  // 3 dofs per node, bending couples neighbours two apart
 // A sub-step whose Newton attempts both fail is halved, at most this often (down to 1/64).
 constexpr int kMaxCutbacks = 6;
+// From this many plants the Newton iterations of plants out of contact run side by side (OpenMP);
+// under it the fork and join cost more than the work.
+constexpr int kPlantsSideBySide = 16;
 
 }  // namespace
 
@@ -43,7 +48,7 @@ void PlantField::initialise_accelerations(const std::vector<Eigen::Vector3d>& am
 
 PlantField::Correction PlantField::apply_newton_correction(
     int plant_index, BandedMatrix& jacobian, const std::vector<Eigen::Vector3d>& residual,
-    bool factorize) {
+    bool factorize, std::vector<double>& correction) {
   const Plant& plant = plants_[plant_index];
   Correction result;
   int failed_row = 0;
@@ -53,14 +58,14 @@ PlantField::Correction PlantField::apply_newton_correction(
     result.node = failed_row / 3 + 1;
     return result;
   }
-  correction_.resize(3 * plant.links);
+  correction.resize(3 * plant.links);
   for (int i = 1; i <= plant.links; ++i)
-    for (int d = 0; d < 3; ++d) correction_[3 * (i - 1) + d] = -residual[plant.first + i][d];
-  jacobian.solve(correction_);
+    for (int d = 0; d < 3; ++d) correction[3 * (i - 1) + d] = -residual[plant.first + i][d];
+  jacobian.solve(correction);
   double largest = 0;
   for (int i = 1; i <= plant.links; ++i) {
-    const Eigen::Vector3d dx(correction_[3 * (i - 1)], correction_[3 * (i - 1) + 1],
-                             correction_[3 * (i - 1) + 2]);
+    const Eigen::Vector3d dx(correction[3 * (i - 1)], correction[3 * (i - 1) + 1],
+                             correction[3 * (i - 1) + 2]);
     positions_[plant.first + i] += dx;
     // std::max drops NaN, so a non-finite correction is caught explicitly.
     const double size =
@@ -137,14 +142,19 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
   if (contact) update_contact_candidates();
   std::vector<char> converged(plants_.size(), 0), refresh(plants_.size(), 0);
   std::vector<double> last_correction(plants_.size(), 0.0);
+  std::vector<Correction> corrections(plants_.size());
   jacobians_.resize(plants_.size());
   for (int iteration = 1; iteration <= parameters_.max_newton_iterations; ++iteration) {
     outcome.iterations = iteration;
     newmark_kinematics(dt, mass_weight);
     if (contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
-    bool all_converged = true;
-    for (int p = 0; p < plant_count(); ++p) {
-      if (converged[p] && !plant_in_contact_[p]) continue;
+    // Plants out of contact do not see each other: solved side by side (each writes only its
+    // own nodes and entries, so the bits are those of the loop in order). Plants in contact
+    // follow in index order (Gauss-Seidel). As in the plain loop, the reported failure is the
+    // lowest failing plant, and plants after it do not matter (the attempt is discarded).
+    int failed = plant_count();
+    auto solve = [&](int p, std::vector<double>& scratch) {
+      if (converged[p] && !plant_in_contact_[p]) return;
       // Gauss-Seidel across plants: contact forces see the partners already corrected in this
       // iteration, which halves the iterations of densely touching plants against Jacobi.
       if (contact && iteration > 1 && plant_in_contact_[p]) refresh_contact_forces(p, dt);
@@ -163,17 +173,9 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
         for (int d = 0; d < 3; ++d)
           jacobian.add_diagonal(3 * (i - 1) + d, node_mass_[k] * mass_weight);
       }
-      const Correction correction = apply_newton_correction(p, jacobian, residual_, factorize);
-      if (correction.singular || !std::isfinite(correction.largest)) {
-        outcome.failure =
-            correction.singular ? "singular Newton Jacobian" : "Newton correction is not finite";
-        outcome.plant = p;
-        outcome.node = correction.node;
-        const Eigen::Vector3d& r = residual_[plant.first + correction.node];
-        outcome.residual = r.allFinite() ? r.norm() : std::numeric_limits<double>::infinity();
-        outcome.correction = correction.largest;
-        return outcome;
-      }
+      const Correction correction =
+          apply_newton_correction(p, jacobian, residual_, factorize, scratch);
+      corrections[p] = correction;
       // Robust attempt: a correction that did not fall by 4 means the kept Jacobian is too far
       // from the current one; refactorise at the next iteration (contact-free plants only:
       // contact iterations converge by Gauss-Seidel sweeps, which a new Jacobian does not
@@ -182,8 +184,42 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
                    correction.largest > 0.25 * last_correction[p];
       last_correction[p] = correction.largest;
       converged[p] = correction.largest <= parameters_.newton_tolerance;
-      all_converged = all_converged && converged[p];
+    };
+    auto fails = [&](int p) {
+      return corrections[p].singular || !std::isfinite(corrections[p].largest);
+    };
+    const auto in_contact = [&](int p) { return contact && plant_in_contact_[p] != 0; };
+    int free_plants = 0;
+    for (int p = 0; p < plant_count(); ++p) free_plants += in_contact(p) ? 0 : 1;
+    const bool side_by_side = free_plants >= kPlantsSideBySide;
+    if (newton_scratch_.size() < static_cast<std::size_t>(omp_get_max_threads()))
+      newton_scratch_.resize(omp_get_max_threads());
+    std::fill(corrections.begin(), corrections.end(), Correction{});
+#pragma omp parallel for schedule(dynamic, 4) reduction(min : failed) if (side_by_side)
+    for (int p = 0; p < plant_count(); ++p) {
+      if (in_contact(p)) continue;
+      solve(p, newton_scratch_[omp_get_thread_num()]);
+      if (fails(p)) failed = std::min(failed, p);
     }
+    for (int p = 0; p < std::min(failed, plant_count()); ++p) {
+      if (!in_contact(p)) continue;
+      solve(p, newton_scratch_[0]);
+      if (fails(p)) failed = p;
+    }
+    if (failed < plant_count()) {
+      const Correction& correction = corrections[failed];
+      const Plant& plant = plants_[failed];
+      outcome.failure =
+          correction.singular ? "singular Newton Jacobian" : "Newton correction is not finite";
+      outcome.plant = failed;
+      outcome.node = correction.node;
+      const Eigen::Vector3d& r = residual_[plant.first + correction.node];
+      outcome.residual = r.allFinite() ? r.norm() : std::numeric_limits<double>::infinity();
+      outcome.correction = correction.largest;
+      return outcome;
+    }
+    const bool all_converged =
+        std::all_of(converged.begin(), converged.end(), [](char c) { return c != 0; });
     if (all_converged) {
       newmark_kinematics(dt, mass_weight);  // state consistent with the final position
       outcome.converged = true;

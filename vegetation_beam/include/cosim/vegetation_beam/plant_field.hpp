@@ -352,8 +352,10 @@ class PlantField {
   double bed_energy() const;  // of the bed springs at the current positions
   // Solves jacobian * correction = -residual for one plant (factorising first if asked) and
   // applies it (not when the factorisation fails).
+  // `correction` is scratch (one per thread).
   Correction apply_newton_correction(int plant, BandedMatrix& jacobian,
-                                     const std::vector<Eigen::Vector3d>& residual, bool factorize);
+                                     const std::vector<Eigen::Vector3d>& residual, bool factorize,
+                                     std::vector<double>& correction);
   // The symmetric stiffness and the lumped mass of one plant about its current shape.
   void linear_problem(int plant, Eigen::MatrixXd& stiffness, Eigen::MatrixXd& mass) const;
 
@@ -373,7 +375,7 @@ class PlantField {
   std::vector<Eigen::Vector3d> previous_drag_;
   bool robust_first_ = false;  // the fast Newton attempt failed earlier in this window
   std::vector<Eigen::Vector3d> forces_, drag_, residual_;
-  std::vector<double> correction_;
+  std::vector<std::vector<double>> newton_scratch_;  // per thread: one plant's correction
   std::vector<BandedMatrix> jacobians_;  // per plant, factorised at a sub-step's first iteration
   // Contact: candidate node pairs within reach plus a margin, rebuilt when nodes moved.
   std::vector<std::pair<int, int>> contact_candidates_;
