@@ -21,19 +21,22 @@ bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength)
 
 // Greedy aggregation in row order (Vanek et al. 1996, section 4): a row whose strong neighbours
 // are all free starts an aggregate with them; a row left over joins the aggregate of its
-// strongest strong neighbour; a row with no aggregated strong neighbour starts its own. A row's
-// strength threshold is found only when the row is visited (most rows are aggregated as someone
-// else's neighbour before their turn and are never read).
+// strongest strong neighbour; a row with no aggregated strong neighbour starts its own.
 void AggregationPreconditioner::build_aggregates(const SparseRows& m, double strength) {
   const int n = m.rows();
-  const auto threshold = [&](int i) {
+  // Every row's threshold first, in parallel (the same values), so that the greedy passes,
+  // which are serial, only compare.
+  strong_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
     double largest = 0.0;
     for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
       if (m.column[k] != i) largest = std::max(largest, -m.value[k]);
     }
     // A row without a negative off-diagonal entry has no strong neighbour.
-    return largest > 0.0 ? strength * largest : std::numeric_limits<double>::infinity();
-  };
+    strong_[i] = largest > 0.0 ? strength * largest : std::numeric_limits<double>::infinity();
+  }
+  const auto threshold = [&](int i) { return strong_[i]; };
   aggregate_.assign(n, -1);
   int count = 0;
   for (int i = 0; i < n; ++i) {
@@ -130,8 +133,14 @@ void AggregationPreconditioner::apply(const std::vector<double>& r, std::vector<
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) z[i] = inverse_diagonal_[i] * r[i];
   if (!factored_) return;
-  coarse_rhs_.setZero(aggregate_count_);
-  for (int i = 0; i < n; ++i) coarse_rhs_[aggregate_[i]] += r[i];
+  // P^T r by aggregate: each sum over the members in row order, as a loop over the rows adds.
+  coarse_rhs_.resize(aggregate_count_);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int a = 0; a < aggregate_count_; ++a) {
+    double sum = 0.0;
+    for (int t = member_offset_[a]; t < member_offset_[a + 1]; ++t) sum += r[member_[t]];
+    coarse_rhs_[a] = sum;
+  }
   coarse_solution_ = factor_.solve(coarse_rhs_);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) z[i] += coarse_solution_[aggregate_[i]];

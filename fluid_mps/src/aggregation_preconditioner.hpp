@@ -40,6 +40,7 @@ class AggregationPreconditioner {
   void build_coarse_matrix(const SparseRows& matrix);
 
   std::vector<double> inverse_diagonal_;
+  std::vector<double> strong_;               // strength threshold of each row
   std::vector<int> aggregate_;               // aggregate of each row
   std::vector<int> member_offset_, member_;  // rows of each aggregate, in row order
   std::vector<int> member_cursor_;
