@@ -113,12 +113,76 @@ void PlantField::newmark_kinematics(double dt, double mass_weight) {
   }
 }
 
+// One Newton iteration of one plant: its residual, the Jacobian when due, and the correction.
+void PlantField::newton_iteration(int p, const NewtonSweep& sweep, NewtonProgress& progress,
+                                  std::vector<double>& scratch) {
+  if (progress.converged[p] && !plant_in_contact_[p]) return;
+  // Gauss-Seidel across plants: contact forces see the partners already corrected in this
+  // iteration, which halves the iterations of densely touching plants against Jacobi.
+  if (sweep.contact && sweep.iteration > 1 && plant_in_contact_[p])
+    refresh_contact_forces(p, sweep.dt);
+  const Plant& plant = plants_[p];
+  // Modified Newton: the Jacobian of the first iteration is kept for the sub-step (later
+  // iterations mostly resolve plant-to-plant contact, which it treats per node anyway).
+  const bool factorize = sweep.iteration == 1 || progress.refresh[p];
+  BandedMatrix& jacobian = jacobians_[p];
+  if (factorize) jacobian.resize(3 * plant.links, kHalfBandwidth);
+  compute_forces(p, positions_, velocities_, *sweep.ambient, sweep.contact, forces_, drag_,
+                 factorize ? &jacobian : nullptr, 1.0, sweep.damping_weight, sweep.robust);
+  for (int i = 1; i <= plant.links; ++i) {
+    const int k = plant.first + i;
+    residual_[k] = node_mass_[k] * accelerations_[k] - forces_[k];
+    if (!factorize) continue;
+    for (int d = 0; d < 3; ++d)
+      jacobian.add_diagonal(3 * (i - 1) + d, node_mass_[k] * sweep.mass_weight);
+  }
+  const Correction correction = apply_newton_correction(p, jacobian, residual_, factorize, scratch);
+  progress.corrections[p] = correction;
+  // Robust attempt: a correction that did not fall by 4 means the kept Jacobian is too far from
+  // the current one; refactorise at the next iteration (contact-free plants only: contact
+  // iterations converge by Gauss-Seidel sweeps, which a new Jacobian does not speed up).
+  progress.refresh[p] = sweep.robust && sweep.iteration > 1 && !plant_in_contact_[p] &&
+                        correction.largest > 0.25 * progress.last_correction[p];
+  progress.last_correction[p] = correction.largest;
+  progress.converged[p] = correction.largest <= parameters_.newton_tolerance;
+}
+
+// Plants out of contact do not see each other: solved side by side (each writes only its own
+// nodes and entries, so the bits are those of the loop in order). Plants in contact follow in
+// index order (Gauss-Seidel). As in the plain loop, the failure reported is the lowest failing
+// plant, and plants after it do not matter (the attempt is then discarded).
+int PlantField::newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress) {
+  const int count = plant_count();
+  const auto in_contact = [&](int p) { return sweep.contact && plant_in_contact_[p] != 0; };
+  const auto fails = [&](int p) {
+    return progress.corrections[p].singular || !std::isfinite(progress.corrections[p].largest);
+  };
+  int free_plants = 0;
+  for (int p = 0; p < count; ++p) free_plants += in_contact(p) ? 0 : 1;
+  const bool side_by_side = free_plants >= kPlantsSideBySide;
+  if (newton_scratch_.size() < static_cast<std::size_t>(omp_get_max_threads()))
+    newton_scratch_.resize(omp_get_max_threads());
+  std::fill(progress.corrections.begin(), progress.corrections.end(), Correction{});
+  int failed = count;
+#pragma omp parallel for schedule(dynamic, 4) reduction(min : failed) if (side_by_side)
+  for (int p = 0; p < count; ++p) {
+    if (in_contact(p)) continue;
+    newton_iteration(p, sweep, progress, newton_scratch_[omp_get_thread_num()]);
+    if (fails(p)) failed = std::min(failed, p);
+  }
+  for (int p = 0; p < std::min(failed, count); ++p) {
+    if (!in_contact(p)) continue;
+    newton_iteration(p, sweep, progress, newton_scratch_[0]);
+    if (fails(p)) failed = p;
+  }
+  return failed;
+}
+
 PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
                                                      const std::vector<Eigen::Vector3d>& ambient,
                                                      bool robust) {
   NewtonOutcome outcome;
   const double mass_weight = 1.0 / (kBeta * dt * dt);
-  const double damping_weight = kGamma / (kBeta * dt);
   positions_ = previous_positions_;
   velocities_ = previous_velocities_;
   accelerations_ = previous_accelerations_;
@@ -138,76 +202,28 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
         positions_[k] += dt * velocities_[k] + 0.5 * dt * dt * accelerations_[k];
     }
   }
-  const bool contact = parameters_.contact && plant_count() > 1;
-  if (contact) update_contact_candidates();
-  std::vector<char> converged(plants_.size(), 0), refresh(plants_.size(), 0);
-  std::vector<double> last_correction(plants_.size(), 0.0);
-  std::vector<Correction> corrections(plants_.size());
+  NewtonSweep sweep;
+  sweep.dt = dt;
+  sweep.mass_weight = mass_weight;
+  sweep.damping_weight = kGamma / (kBeta * dt);
+  sweep.robust = robust;
+  sweep.contact = parameters_.contact && plant_count() > 1;
+  sweep.ambient = &ambient;
+  if (sweep.contact) update_contact_candidates();
+  NewtonProgress progress;
+  progress.converged.assign(plants_.size(), 0);
+  progress.refresh.assign(plants_.size(), 0);
+  progress.last_correction.assign(plants_.size(), 0.0);
+  progress.corrections.resize(plants_.size());
   jacobians_.resize(plants_.size());
   for (int iteration = 1; iteration <= parameters_.max_newton_iterations; ++iteration) {
     outcome.iterations = iteration;
+    sweep.iteration = iteration;
     newmark_kinematics(dt, mass_weight);
-    if (contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
-    // Plants out of contact do not see each other: solved side by side (each writes only its
-    // own nodes and entries, so the bits are those of the loop in order). Plants in contact
-    // follow in index order (Gauss-Seidel). As in the plain loop, the reported failure is the
-    // lowest failing plant, and plants after it do not matter (the attempt is discarded).
-    int failed = plant_count();
-    auto solve = [&](int p, std::vector<double>& scratch) {
-      if (converged[p] && !plant_in_contact_[p]) return;
-      // Gauss-Seidel across plants: contact forces see the partners already corrected in this
-      // iteration, which halves the iterations of densely touching plants against Jacobi.
-      if (contact && iteration > 1 && plant_in_contact_[p]) refresh_contact_forces(p, dt);
-      const Plant& plant = plants_[p];
-      // Modified Newton: the Jacobian of the first iteration is kept for the sub-step (later
-      // iterations mostly resolve plant-to-plant contact, which it treats per node anyway).
-      const bool factorize = iteration == 1 || refresh[p];
-      BandedMatrix& jacobian = jacobians_[p];
-      if (factorize) jacobian.resize(3 * plant.links, kHalfBandwidth);
-      compute_forces(p, positions_, velocities_, ambient, contact, forces_, drag_,
-                     factorize ? &jacobian : nullptr, 1.0, damping_weight, robust);
-      for (int i = 1; i <= plant.links; ++i) {
-        const int k = plant.first + i;
-        residual_[k] = node_mass_[k] * accelerations_[k] - forces_[k];
-        if (!factorize) continue;
-        for (int d = 0; d < 3; ++d)
-          jacobian.add_diagonal(3 * (i - 1) + d, node_mass_[k] * mass_weight);
-      }
-      const Correction correction =
-          apply_newton_correction(p, jacobian, residual_, factorize, scratch);
-      corrections[p] = correction;
-      // Robust attempt: a correction that did not fall by 4 means the kept Jacobian is too far
-      // from the current one; refactorise at the next iteration (contact-free plants only:
-      // contact iterations converge by Gauss-Seidel sweeps, which a new Jacobian does not
-      // speed up).
-      refresh[p] = robust && iteration > 1 && !plant_in_contact_[p] &&
-                   correction.largest > 0.25 * last_correction[p];
-      last_correction[p] = correction.largest;
-      converged[p] = correction.largest <= parameters_.newton_tolerance;
-    };
-    auto fails = [&](int p) {
-      return corrections[p].singular || !std::isfinite(corrections[p].largest);
-    };
-    const auto in_contact = [&](int p) { return contact && plant_in_contact_[p] != 0; };
-    int free_plants = 0;
-    for (int p = 0; p < plant_count(); ++p) free_plants += in_contact(p) ? 0 : 1;
-    const bool side_by_side = free_plants >= kPlantsSideBySide;
-    if (newton_scratch_.size() < static_cast<std::size_t>(omp_get_max_threads()))
-      newton_scratch_.resize(omp_get_max_threads());
-    std::fill(corrections.begin(), corrections.end(), Correction{});
-#pragma omp parallel for schedule(dynamic, 4) reduction(min : failed) if (side_by_side)
-    for (int p = 0; p < plant_count(); ++p) {
-      if (in_contact(p)) continue;
-      solve(p, newton_scratch_[omp_get_thread_num()]);
-      if (fails(p)) failed = std::min(failed, p);
-    }
-    for (int p = 0; p < std::min(failed, plant_count()); ++p) {
-      if (!in_contact(p)) continue;
-      solve(p, newton_scratch_[0]);
-      if (fails(p)) failed = p;
-    }
+    if (sweep.contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
+    const int failed = newton_sweep(sweep, progress);
     if (failed < plant_count()) {
-      const Correction& correction = corrections[failed];
+      const Correction& correction = progress.corrections[failed];
       const Plant& plant = plants_[failed];
       outcome.failure =
           correction.singular ? "singular Newton Jacobian" : "Newton correction is not finite";
@@ -218,17 +234,16 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
       outcome.correction = correction.largest;
       return outcome;
     }
-    const bool all_converged =
-        std::all_of(converged.begin(), converged.end(), [](char c) { return c != 0; });
-    if (all_converged) {
+    if (std::all_of(progress.converged.begin(), progress.converged.end(),
+                    [](char c) { return c != 0; })) {
       newmark_kinematics(dt, mass_weight);  // state consistent with the final position
       outcome.converged = true;
       return outcome;
     }
   }
   outcome.failure = "Newton iteration did not converge";
-  locate_largest_residual(converged, outcome);
-  outcome.correction = last_correction[outcome.plant];
+  locate_largest_residual(progress.converged, outcome);
+  outcome.correction = progress.last_correction[outcome.plant];
   return outcome;
 }
 

@@ -323,6 +323,23 @@ class PlantField {
   // 22-23; mass_weight = 1 / (beta dt^2)); the clamped bases at rest.
   void newmark_kinematics(double dt, double mass_weight);
   NewtonOutcome newton_attempt(double dt, const std::vector<Eigen::Vector3d>& ambient, bool robust);
+  // What one Newton iteration over the plants needs to know.
+  struct NewtonSweep {
+    double dt = 0, mass_weight = 0, damping_weight = 0;
+    int iteration = 1;
+    bool robust = false, contact = false;
+    const std::vector<Eigen::Vector3d>* ambient = nullptr;
+  };
+  // Per plant, over the iterations of one attempt.
+  struct NewtonProgress {
+    std::vector<char> converged, refresh;
+    std::vector<double> last_correction;
+    std::vector<Correction> corrections;  // of the current iteration
+  };
+  void newton_iteration(int plant, const NewtonSweep& sweep, NewtonProgress& progress,
+                        std::vector<double>& scratch);
+  // One iteration over all plants; returns the lowest failing plant, or plant_count().
+  int newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress);
   // Plant and node with the largest residual among the plants not `converged`.
   void locate_largest_residual(const std::vector<char>& converged, NewtonOutcome& outcome) const;
   void check_state(const std::vector<Eigen::Vector3d>& ambient) const;
