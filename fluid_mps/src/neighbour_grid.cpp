@@ -308,9 +308,10 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
   std::vector<std::vector<int>> block_index(threads);
   std::vector<std::int64_t> segment(n, 0);
   std::vector<int> owner(n, 0);
+  // Rows before each cell (without `rows`, every listed particle has one: cell_start_).
   const std::vector<std::int64_t>* row_start = &cell_start_;
   std::vector<std::int64_t> wanted_start;
-  if (rows && threads > 1) {
+  if (rows) {
     wanted_start.assign(static_cast<std::size_t>(cell_count) + 1, 0);
     for (std::int64_t c = 0; c < cell_count; ++c) {
       std::int64_t wanted = 0;
@@ -335,11 +336,7 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
     KeyedScratch scratch;
     for (std::int64_t c = c_begin; c < c_end; ++c) {
       // A cell none of whose particles wants a row of its own is not searched at all.
-      bool wanted = false;
-      for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1] && !wanted; ++s) {
-        wanted = wants_row(sorted_[s]);
-      }
-      if (!wanted) continue;
+      if ((*row_start)[c + 1] == (*row_start)[c]) continue;
       gather_candidates(c, positions, key, scratch);
       for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
         const int i = sorted_[s];

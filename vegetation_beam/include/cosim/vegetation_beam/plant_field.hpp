@@ -368,8 +368,7 @@ class PlantField {
   void setup_bed_contact(Plant& plant, const PlantSpec& spec, double link_mass) const;
   double bed_energy() const;  // of the bed springs at the current positions
   // Solves jacobian * correction = -residual for one plant (factorising first if asked) and
-  // applies it (not when the factorisation fails).
-  // `correction` is scratch (one per thread).
+  // applies it (not when the factorisation fails); `correction` is scratch (one per thread).
   Correction apply_newton_correction(int plant, BandedMatrix& jacobian,
                                      const std::vector<Eigen::Vector3d>& residual, bool factorize,
                                      std::vector<double>& correction);
