@@ -51,7 +51,8 @@ inline ContactGeometry sphere_sphere(const Eigen::Vector3d& center_a, double rad
   g.touching = true;
   g.feature = ContactFeature::kSphereSphere;
   g.overlap = radius_a + radius_b - distance;
-  g.normal = distance > 0.0 ? Eigen::Vector3d(center_a / distance) : Eigen::Vector3d::UnitZ();
+  g.normal =
+      distance > 0.0 ? Eigen::Vector3d(center_a * (1.0 / distance)) : Eigen::Vector3d::UnitZ();
   // Midway through the overlap lens: B's surface point pushed in by half the overlap.
   g.point = g.normal * (radius_b - 0.5 * g.overlap);
   return g;

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "cosim/debris_dem/contact_geometry.hpp"
@@ -88,10 +89,10 @@ double damping_ratio_for_restitution(double e, bool clipped);
   // pair spring turns with the contact, eq. 10-12), keep its length, add this step's increment.
   const Eigen::Vector3d tangential_velocity = relative_velocity - normal_velocity * n;
   Eigen::Vector3d spring = tangential_spring;
-  const double old_length = spring.norm();
+  const double old_length_squared = spring.squaredNorm();
   spring -= spring.dot(n) * n;
-  const double new_length = spring.norm();
-  if (new_length > 0.0) spring *= old_length / new_length;
+  const double new_length_squared = spring.squaredNorm();
+  if (new_length_squared > 0.0) spring *= std::sqrt(old_length_squared / new_length_squared);
   spring += tangential_velocity * dt;  // eq. (11): S(t) = S(t - dt) + k dq
   Eigen::Vector3d tangential_force =
       -c.tangential_stiffness * spring - c.tangential_damping * tangential_velocity;
@@ -100,8 +101,10 @@ double damping_ratio_for_restitution(double e, bool clipped);
   // spring holds exactly the limit force, so sliding stops smoothly when the load drops.
   const double coulomb_load = clip ? normal_force : c.normal_stiffness * overlap;
   const double limit = c.friction * std::max(coulomb_load, 0.0);
-  const double magnitude = tangential_force.norm();
-  if (magnitude > limit) {
+  // Compared squared: a sticking contact (most of a packed bed's) needs no square root.
+  const double magnitude_squared = tangential_force.squaredNorm();
+  if (magnitude_squared > limit * limit) {
+    const double magnitude = std::sqrt(magnitude_squared);
     tangential_force *= magnitude > 0.0 ? limit / magnitude : 0.0;
     spring = c.tangential_stiffness > 0.0
                  ? Eigen::Vector3d(-tangential_force / c.tangential_stiffness)

@@ -164,10 +164,11 @@ class DemWorld {
     Eigen::Vector3d edge2 = Eigen::Vector3d::Zero();
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   };
+  // 12 bytes: the candidate loop streams every slot each step (a sphere pair's reach is the sum
+  // of the radii in the hot copies it reads anyway).
   struct PairSlot {
     int a = -1;
     int b = -1;
-    double reach = 0.0;  // radius_a + radius_b (m): a sphere pair farther apart is not touching
     PairKind kind = PairKind::kSphereSphere;
     bool touching = false;
   };
