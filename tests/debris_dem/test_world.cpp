@@ -118,6 +118,64 @@ TEST(DemWorld, FastRotatingLogEndSweepTriggersListRebuild) {
   EXPECT_FALSE(hits_sphere(false));  // fixed interval alone misses the contact
 }
 
+// A free log spinning end over end (about a principal axis normal to its own) turns its axis
+// uniformly: after t its axis is (cos w t, sin w t, 0), at 0.5 mrad a step (the attitude's
+// small-angle series) and at 20 mrad a step (sine and cosine), where a single turn by omega dt
+// let the log flip onto its own axis by 0.03 s. A sphere spinning beside it keeps its angular
+// velocity and, having no attitude, the identity.
+TEST(DemWorld, LogSpinningEndOverEndTurnsItsAxisUniformly) {
+  for (const double spin : {50.0, 2000.0}) {  // rad/s
+    DemParameters p;
+    p.gravity.setZero();
+    DemWorld world(p);
+    Material m;
+    const int log = world.add_cylinder({0, 0, 0}, Eigen::Vector3d::UnitX(), 0.005, 0.1, m);
+    const int ball = world.add_sphere({0.0, 0.5, 0.0}, 0.005, m);
+    world.set_angular_velocity(log, {0, 0, spin});
+    world.set_angular_velocity(ball, {spin, 0, 0});
+    const double dt = 1e-5;
+    const int steps = 10000;
+    for (int k = 0; k < steps; ++k) world.step(dt);
+    const double angle = spin * dt * steps;
+    EXPECT_NEAR(world.axis(log).x(), std::cos(angle), 1e-9) << spin;
+    EXPECT_NEAR(world.axis(log).y(), std::sin(angle), 1e-9) << spin;
+    EXPECT_NEAR(world.axis(log).z(), 0.0, 1e-12) << spin;
+    EXPECT_NEAR(world.angular_velocity(log).z(), spin, 1e-9 * spin) << spin;
+    EXPECT_NEAR(world.orientation(log).norm(), 1.0, 1e-14) << spin;
+    EXPECT_NEAR(world.angular_velocity(ball).x(), spin, 1e-9 * spin) << spin;
+    EXPECT_TRUE(
+        world.orientation(ball).coeffs().isApprox(Eigen::Quaterniond::Identity().coeffs(), 0.0))
+        << spin;
+  }
+}
+
+// A log spinning about its own axis and tumbling at once (the free symmetric top): its axis
+// precesses about the fixed angular momentum L at |L| / I_t, and its kinetic energy
+// L . omega / 2 stays; at 6 mrad a step of tumbling and 30 mrad of spin.
+TEST(DemWorld, TumblingLogPrecessesAboutItsAngularMomentum) {
+  DemParameters p;
+  p.gravity.setZero();
+  DemWorld world(p);
+  Material m;
+  const double radius = 0.005, length = 0.1;
+  const int log = world.add_cylinder({0, 0, 0}, Eigen::Vector3d::UnitX(), radius, length, m);
+  const double mass = world.mass(log);
+  const double transverse = mass * (3 * radius * radius + length * length) / 12.0;
+  const double axial = 0.5 * mass * radius * radius;
+  const Eigen::Vector3d omega0(3000.0, 0.0, 600.0);  // rad/s: spin about x (the axis), tumble
+  world.set_angular_velocity(log, omega0);
+  const Eigen::Vector3d momentum(axial * omega0.x(), 0.0, transverse * omega0.z());
+  const double energy0 = world.kinetic_energy();
+  const double dt = 1e-5;
+  const int steps = 20000;
+  for (int k = 0; k < steps; ++k) world.step(dt);
+  const double precession = momentum.norm() / transverse * dt * steps;  // rad
+  const Eigen::Vector3d expected =
+      Eigen::AngleAxisd(precession, momentum.normalized()) * Eigen::Vector3d::UnitX();
+  EXPECT_LT((world.axis(log) - expected).norm(), 1e-8);
+  EXPECT_NEAR(world.kinetic_energy(), energy0, 1e-10 * energy0);
+}
+
 TEST(DemWorld, LocalOriginsMakeResultsIndependentOfAbsolutePosition) {
   // Section 2.4(10): far from the origin, contact geometry uses region-local coordinates, so
   // relative motion is identical to the run at the origin.

@@ -77,8 +77,11 @@ class DemWorld {
   [[nodiscard]] Eigen::Vector3d position(int element) const;  // center (triangle: vertex a)
   [[nodiscard]] Eigen::Vector3d velocity(int element) const;
   [[nodiscard]] Eigen::Vector3d angular_velocity(int element) const;  // world frame
-  [[nodiscard]] Eigen::Quaterniond orientation(int element) const;    // body -> world
-  [[nodiscard]] Eigen::Vector3d axis(int element) const;              // cylinder axis (world)
+  // Body -> world. A sphere keeps the attitude it was built with (the identity): nothing of a
+  // sphere (contacts, fluid forces, output) depends on it, so it is not integrated, as in
+  // LIGGGHTS' nve/sphere; its angular velocity is.
+  [[nodiscard]] Eigen::Quaterniond orientation(int element) const;
+  [[nodiscard]] Eigen::Vector3d axis(int element) const;  // cylinder axis (world)
   [[nodiscard]] double radius(int element) const;
   [[nodiscard]] double length(int element) const;  // cylinder full length, else 0
   [[nodiscard]] double mass(int element) const;
