@@ -329,6 +329,7 @@ void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift,
   }
   for (int row = 0; row < m; ++row) row_length_[row + 1] += row_length_[row];
   matrix.offset = row_length_;
+  matrix.diagonal_first = true;  // below: the first slot, then zeros in its column
   matrix.column.resize(row_length_[m]);
   matrix.value.resize(row_length_[m]);
 #pragma omp parallel for schedule(static) if (m >= 4096)

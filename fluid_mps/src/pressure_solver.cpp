@@ -345,8 +345,13 @@ void invert_diagonal(const SparseRows& matrix, std::vector<double>& inverse) {
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     double diagonal = 0.0;
-    for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
-      if (matrix.column[k] == i) diagonal += matrix.value[k];
+    if (matrix.diagonal_first) {
+      // The same value as the sum below: the other entries of the column are zeros.
+      diagonal = matrix.offset[i + 1] > matrix.offset[i] ? matrix.value[matrix.offset[i]] : 0.0;
+    } else {
+      for (std::int64_t k = matrix.offset[i]; k < matrix.offset[i + 1]; ++k) {
+        if (matrix.column[k] == i) diagonal += matrix.value[k];
+      }
     }
     inverse[i] = diagonal > 0.0 ? 1.0 / diagonal : 1.0;
   }

@@ -13,6 +13,9 @@ struct SparseRows {
   std::vector<std::int64_t> offset{0};
   std::vector<int> column;
   std::vector<double> value;
+  // Set by an assembly whose rows start with their diagonal entry (any later entry in the
+  // diagonal's column is a zero): invert_diagonal() then reads it without a scan of the row.
+  bool diagonal_first = false;
   int rows() const { return static_cast<int>(offset.size()) - 1; }
 };
 
