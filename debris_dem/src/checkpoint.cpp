@@ -26,7 +26,6 @@ struct DemWorldCheckpoint {
     v("dem.hot_position", w.hot_position_);
     v("dem.hot_velocity", w.hot_velocity_);
     v("dem.gravity_force", w.gravity_force_);
-    v("dem.turn_angle", w.turn_angle_);
     v("dem.pair_results", w.pair_results_);
     v("dem.triangle_pairs", w.triangle_pairs_);
     v("dem.triangle_group_start", w.triangle_group_start_);

@@ -392,7 +392,6 @@ bool DemWorld::integrate(double dt, bool with_fluid) {
   const bool keep_hot = hot_valid_ && hot_position_.size() == elements_.size();
   const Eigen::Vector3d& domain_min = parameters_.domain_min;
   const Eigen::Vector3d& domain_max = parameters_.domain_max;
-  turn_angle_.resize(count);
   bool suspect = false;
   double largest = 0.0;  // m, largest sweep of a moving element since the last list build
   double second = 0.0;   // m, second largest
@@ -425,13 +424,11 @@ bool DemWorld::integrate(double dt, bool with_fluid) {
       e.angular_velocity = e.angular_momentum / e.inertia_body.x();
       // No attitude (orientation() in dem_world.hpp): turning it cost 8 % of a packed bed's step.
       e.sweep += e.velocity.norm() * dt;
-      turn_angle_[k] = 0.0;
     } else {
       const Eigen::Matrix3d r = e.orientation.toRotationMatrix();
       e.angular_velocity = r * (r.transpose() * e.angular_momentum).cwiseQuotient(e.inertia_body);
       const double angle = e.angular_velocity.norm() * dt;
       e.sweep += e.velocity.norm() * dt + e.half_length * angle;
-      turn_angle_[k] = angle;
       if (angle > 0.0) {
         e.orientation =
             free_top_turn(e.orientation, e.angular_momentum, e.axis, e.inertia_body, dt);

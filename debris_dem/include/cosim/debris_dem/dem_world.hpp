@@ -292,7 +292,6 @@ class DemWorld {
   double sweep_largest_ = 0.0;
   double sweep_second_ = 0.0;
   bool sweep_top_valid_ = false;
-  std::vector<double> turn_angle_;  // rad, |omega| dt of this sub-step per moving element
   Eigen::Vector3d gravity_force_for_ =
       Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<PairResult> pair_results_;     // threads > 1 only: results gathered in list order
