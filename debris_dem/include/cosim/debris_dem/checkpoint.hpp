@@ -9,7 +9,7 @@
 namespace cosim::dem {
 
 // Schema of the records below; bumped when they change.
-inline constexpr std::uint32_t kDemCheckpointSchema = 2;
+inline constexpr std::uint32_t kDemCheckpointSchema = 3;
 
 void save_checkpoint(const DemWorld& world, checkpoint::Writer& out);
 // `world` must hold the same scene (element and material counts are checked).

@@ -138,9 +138,8 @@ class DemWorld {
   DemParameters& mutable_parameters() { return parameters_; }
 
   // Internal layout, public for the candidate list and contact kernels in src/.
-  // Line-aligned, with what the contact loop reads of the other element of a pair (position,
-  // radius, velocities) in the first 128 bytes: 5000 elements are 1.9 MB and share the core's
-  // L2 with the pair lists, so a pair costs one or two cache lines of element B, not four.
+  // Line-aligned, with all that a sphere's integration reads and writes in the first three
+  // cache lines (the contact loops read the compact copies below instead).
   struct alignas(64) Element {
     ElementKind kind = ElementKind::kSphere;
     bool fixed = false;
@@ -153,14 +152,14 @@ class DemWorld {
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
     Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // world frame
     double inverse_mass = 0.0;
+    double sweep = 0.0;  // bound on surface-point travel since the last list build
     Eigen::Vector3d angular_momentum = Eigen::Vector3d::Zero();  // world frame
+    Eigen::Vector3d inertia_body = Eigen::Vector3d::Zero();      // principal, body z = axis
     Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
     Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // cylinder axis, world frame
     double half_length = 0.0;
     double mass = 0.0;
-    Eigen::Vector3d inertia_body = Eigen::Vector3d::Zero();  // principal, body z = axis
     double bounding_radius = 0.0;
-    double sweep = 0.0;  // bound on surface-point travel since the last list build
     int material = 0;
     // Triangle geometry relative to vertex a (the anchor).
     Eigen::Vector3d edge1 = Eigen::Vector3d::Zero();
