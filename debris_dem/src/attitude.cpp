@@ -3,6 +3,7 @@
 #include <cmath>
 
 namespace cosim::dem {
+namespace {
 
 // The unit quaternion of a turn by omega dt (angle = |omega| dt > 0, rad):
 // (cos(angle / 2), sin(angle / 2) omega / |omega|). sin(h) / h and cos(h) of the half angle h by
@@ -36,6 +37,8 @@ Eigen::Quaterniond renormalised(Eigen::Quaterniond q) {
   }
   return q;
 }
+
+}  // namespace
 
 // The torque-free turn of an axisymmetric body (a log) over dt with its angular momentum L held
 // fixed, exactly: for principal moments I_t (transverse) and I_a (about the axis a), the body

@@ -1,16 +1,10 @@
 // Attitude of a log over one DEM step (dem_step.cpp's integration): the exact turn of a free
-// symmetric top, and the quaternion helpers it is made of.
+// symmetric top.
 #pragma once
 
 #include <Eigen/Geometry>
 
 namespace cosim::dem {
-
-// The unit quaternion of a turn by omega dt (angle = |omega| dt > 0, rad).
-Eigen::Quaterniond turn(const Eigen::Vector3d& omega, double angle, double dt);
-
-// q scaled back to unit length (q a product of unit quaternions, or near one).
-Eigen::Quaterniond renormalised(Eigen::Quaterniond q);
 
 // The attitude q of an axisymmetric body (principal moments inertia = (I_t, I_t, I_a), body z
 // its axis, world axis `axis` = q e_z) turned over dt with its angular momentum (world) held.
