@@ -46,8 +46,9 @@ Eigen::Quaterniond renormalised(Eigen::Quaterniond q) {
 // and the two turns compose as R(t) = exp(t [L / I_t]) R0 exp(t s [e_z]) (the free symmetric top;
 // Dullweber, Leimkuhler & McLachlan 1997, J. Chem. Phys. 107, 5840, use this split for rigid
 // bodies). Both turns keep L . a, so a log spinning fast end over end stays so; a single turn
-// by omega dt does not, and with I_t / I_a = 67 (a 10 x 100 mm log) the error grew until the log
-// spun about its own axis at 67 times the energy (from about 1 000 rad/s at dt = 1e-5 s).
+// by omega dt does not, and with I_t / I_a = 67 (a 10 x 100 mm log) at 2000 rad/s and dt = 1e-5 s
+// the error grew until the log spun about its own axis at 67 times the energy
+// (DemWorld.LogSpinningEndOverEndTurnsItsAxisUniformly).
 Eigen::Quaterniond free_top_turn(const Eigen::Quaterniond& q, const Eigen::Vector3d& momentum,
                                  const Eigen::Vector3d& axis, const Eigen::Vector3d& inertia,
                                  double dt) {
