@@ -56,6 +56,10 @@ Eigen::VectorXd Accelerator::next(const Eigen::VectorXd& x, const Eigen::VectorX
         const double dr2 = dr.squaredNorm();
         // dr = 0: the residual did not change (already converged or a flat map); keep omega.
         if (dr2 > 0.0) omega_ = -omega_ * previous_r_.dot(dr) / dr2;
+        if (options_.positive_aitken && !(omega_ > 0.0)) {
+          omega_ = options_.relaxation;
+          ++aitken_restarts_;
+        }
       }
       next = x + omega_ * r;
       break;

@@ -47,6 +47,7 @@ AccelerationOptions acceleration_options(const scenario::ImplicitSettings& setti
   options.reuse_windows = settings.reuse_windows;
   options.filter = settings.filter;
   options.max_step = settings.max_step;
+  options.positive_aitken = settings.positive_aitken;
   return options;
 }
 }  // namespace
@@ -101,6 +102,7 @@ class Coupler::ImplicitWindows {
       previous_dt = dt;
       c_.bus_->forget_fields_before(index - 2);
     }
+    result_.aitken_restarts = accelerator_.aitken_restarts();
     if (accelerator_.bounded_steps() > 0) {
       spdlog::info("coupling.implicit.max_step shortened {} accelerated updates",
                    accelerator_.bounded_steps());

@@ -134,6 +134,26 @@ std::vector<SolidForcing> FlowLink::receive_solids(const Window& window, bool wi
     }
     SolidForcing state;
     state.name = name;
+    if (resolves(name)) {
+      // The accepted window-start state, as iteration 0 read it (exchange::resolved_path).
+      std::vector<Eigen::Vector3d> start = positions, start_velocity = velocities;
+      if (relaxed) {
+        const int64_t previous = exchange::solid_window_for_flow(window.index);
+        auto start_field = [&](const char* field_name) {
+          return exchange::unpack(
+              participant_.receive(name, field_name, previous, window.accepted_iteration), count,
+              fmt::format("field '{}' from '{}' (window {})", field_name, name, previous));
+        };
+        start = start_field(exchange::kPositions);
+        start_velocity = start_field(exchange::kVelocities);
+      }
+      for (std::size_t i = 0; i < count; ++i) {
+        const auto path = exchange::resolved_path(start[i], start_velocity[i],
+                                                  relaxed ? &positions[i] : nullptr, window.dt);
+        state.path_start.push_back(frame_.to_solver(path.start));
+        state.path_velocity.push_back(frame_.to_solver(path.velocity));
+      }
+    }
     // 2D: the slice of the span the flow stands for holds volume / span of each solid.
     for (const double v : volumes) state.volumes.push_back(v / frame_.span());  // 3D: span 1
     state.positions.reserve(count);

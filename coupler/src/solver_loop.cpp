@@ -142,6 +142,7 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
       continue;
     }
     if (output_pending && (window.checkpoint || window.finish || window.iteration == 0)) {
+      solver.window_accepted();
       write_if_due();
       output_pending = false;
     }
@@ -178,6 +179,7 @@ void run_solver_loop(ProcessContext& context, Solver& solver, double interval) {
       output_pending = true;
     } else {
       last = window.index == 0 ? solver.initial_window(window) : solver.advance(window);
+      if (window.index > 0) solver.window_accepted();
       write_if_due();
     }
     participant.done(last.steps, last.stable_dt);

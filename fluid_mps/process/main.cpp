@@ -149,7 +149,7 @@ class FluidProcess final : public coupler::Solver {
   coupler::WindowResult advance(const coupler::Window& window) override {
     const auto solids = link_.receive_solids(window, config_.displacement_radius > 0.0);
     for (const auto& solid : solids) {
-      if (link_.resolves(solid.name)) place_blade(solid);
+      if (link_.resolves(solid.name)) place_blade(solid, window);
     }
     int window_steps = 0;
     if (window.dt > 0.0) window_steps = step_window(window, solids);
@@ -217,6 +217,10 @@ class FluidProcess final : public coupler::Solver {
     if (!blade_.empty()) {
       // coupling.resolved_plants: the impulse of the fluid's pressure on the plant [N s].
       info["resolved_plant_load_impulse"] = json(config_.frame.force_to_world(blade_impulse_));
+      // The largest distance between a node where the plant ended a window and where the fluid
+      // had moved its wall particle [m]: the explicit scheme's extrapolation (of order a dt^2),
+      // within the tolerance for converged implicit windows.
+      info["resolved_wall_gap"] = resolved_wall_gap_;
     }
   }
 
@@ -242,6 +246,7 @@ class FluidProcess final : public coupler::Solver {
     if (!blade_.empty()) {
       out.vector("fluid_process.blade_particles", blade_);
       out.value("fluid_process.blade_impulse", blade_impulse_);
+      out.value("fluid_process.resolved_wall_gap", resolved_wall_gap_);
     }
   }
   void load_checkpoint(const checkpoint::Reader& in) override {
@@ -277,6 +282,7 @@ class FluidProcess final : public coupler::Solver {
     if (!blade.empty()) {
       blade_ = std::move(blade);
       blade_impulse_ = in.value<Eigen::Vector3d>("fluid_process.blade_impulse");
+      resolved_wall_gap_ = in.value<double>("fluid_process.resolved_wall_gap");
     }
   }
 
@@ -309,11 +315,12 @@ class FluidProcess final : public coupler::Solver {
     return system;
   }
 
-  // coupling.resolved_plants: the plant stands in the fluid as one wall particle per node, moved
-  // to the node's exchanged position with its exchanged velocity each window, with thin
-  // partitions along its links (FluidSystem::set_moving_walls). The particles are added to the
-  // fluid the first time the plant is seen (window 0).
-  void place_blade(const coupler::SolidForcing& solid) {
+  // coupling.resolved_plants: the plant stands in the fluid as one wall particle per node, put
+  // each window at the start of the node's path (coupler::exchange::resolved_path) and moved
+  // along it with its velocity, with thin partitions along its links
+  // (FluidSystem::set_moving_walls). The particles are added to the fluid the first time the
+  // plant is seen (window 0).
+  void place_blade(const coupler::SolidForcing& solid, const coupler::Window& window) {
     const double l0 = config_.parameters.particle_spacing;
     if (config_.parameters.dimension != 2) {
       throw std::runtime_error("coupling.resolved_plants needs a 2D fluid_mps");
@@ -349,13 +356,18 @@ class FluidProcess final : public coupler::Solver {
       throw std::runtime_error(fmt::format("'{}' sent {} points where its wall has {}", solid.name,
                                            solid.positions.size(), blade_.size()));
     }
-    std::vector<mps::PartitionSegment> segments;
-    for (std::size_t k = 0; k < blade_.size(); ++k) {
-      system_->set_particle(blade_[k], mps::ParticleKind::wall, solid.positions[k],
-                            solid.velocities[k]);
-      if (k > 0) {
-        segments.push_back({solid.positions[k - 1].head<2>(), solid.positions[k].head<2>(), true});
+    if (window.iteration == 0 && window.index > 1) {
+      // Where the fluid moved the wall to in the last window against where the plant ended it.
+      for (std::size_t k = 0; k < blade_.size(); ++k) {
+        resolved_wall_gap_ = std::max(
+            resolved_wall_gap_, (system_->positions()[blade_[k]] - solid.path_start[k]).norm());
       }
+    }
+    std::vector<mps::PartitionSegment> segments;
+    const auto& start = solid.path_start;
+    for (std::size_t k = 0; k < blade_.size(); ++k) {
+      system_->set_particle(blade_[k], mps::ParticleKind::wall, start[k], solid.path_velocity[k]);
+      if (k > 0) segments.push_back({start[k - 1].head<2>(), start[k].head<2>(), true});
     }
     system_->set_moving_walls(blade_, std::move(segments));
     blade_window_impulse_.assign(blade_.size(), Eigen::Vector3d::Zero());
@@ -461,6 +473,7 @@ class FluidProcess final : public coupler::Solver {
   double budget_scale_ = 0.0;
   std::vector<double> water_, surface_;
   std::vector<int> blade_;  // coupling.resolved_plants: the plant's wall particles, node order
+  double resolved_wall_gap_ = 0.0;                     // [m], see finish()
   std::vector<Eigen::Vector3d> blade_window_impulse_;  // this window's, per node [N s/m]
   Eigen::Vector3d blade_impulse_ = Eigen::Vector3d::Zero();
 };

@@ -90,6 +90,42 @@ TEST(Acceleration, AitkenOnAScalarMapIsTheSecantMethod) {
   EXPECT_EQ(iterate(aitken, map, Eigen::VectorXd::Zero(1), 10, 1e-12), 3);
 }
 
+TEST(Acceleration, PositiveAitkenStartsAgainWhereTheSecantTurnsNegative) {
+  // One unknown: x = 0 gives h = 1 (r = 1), the step 0.1 r to x = 0.1 gives h = 2.1 (r = 2): the
+  // residual grew along the step, and the secant factor -0.1 r0 (r1 - r0) / (r1 - r0)^2 = -0.1
+  // would step back, to x = -0.1.
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(1), h0 = Eigen::VectorXd::Constant(1, 1.0);
+  const Eigen::VectorXd h1 = Eigen::VectorXd::Constant(1, 2.1);
+  AccelerationOptions plain{AccelerationKind::aitken, 0.1};
+  AccelerationOptions positive = plain;
+  positive.positive_aitken = true;
+  Accelerator secant(plain), restarted(positive);
+  const Eigen::VectorXd x1 = secant.next(x0, h0);
+  ASSERT_DOUBLE_EQ(x1[0], 0.1);
+  ASSERT_DOUBLE_EQ(restarted.next(x0, h0)[0], 0.1);
+  EXPECT_NEAR(secant.next(x1, h1)[0], 0.1 - 0.1 * 2.0, 1e-15);
+  EXPECT_NEAR(secant.aitken_factor(), -0.1, 1e-15);
+  EXPECT_NEAR(restarted.next(x1, h1)[0], 0.1 + 0.1 * 2.0, 1e-15);  // relaxation again
+  EXPECT_EQ(restarted.aitken_restarts(), 1);
+  EXPECT_EQ(secant.aitken_restarts(), 0);
+}
+
+TEST(Acceleration, PositiveAitkenLeavesAContractingSecantAlone) {
+  // The expanding map's eigenvalues all lie below 1: the factors stay positive and the iterates
+  // are those of plain Aitken.
+  const auto map = expanding_map();
+  AccelerationOptions positive{AccelerationKind::aitken, 0.4};
+  positive.positive_aitken = true;
+  Accelerator aitken({AccelerationKind::aitken, 0.4}), restarted(positive);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(5), y = x;
+  for (int k = 0; k < 40; ++k) {
+    x = aitken.next(x, map(x));
+    y = restarted.next(y, map(y));
+    ASSERT_EQ(x, y) << "iteration " << k;
+  }
+  EXPECT_EQ(restarted.aitken_restarts(), 0);
+}
+
 TEST(Acceleration, IqnIlsConvergesWithinTheDimensionPlusTwo) {
   // On a linear map of n unknowns the columns span the Krylov space after n differences, and
   // the least-squares step is then exact (Degroote et al. 2009 relate IQN-ILS to GMRES): at most

@@ -330,5 +330,96 @@ TEST(CouplingRun, AStableDtFromAParticipantThatDeclaredNoLimitStopsTheRun) {
       << outcome.result.failure;
 }
 
+// coupling.resolved_plants under serial-implicit (exchange::resolved_path): the flow moves the
+// solid's wall from where the solid started the window. The first iteration, like the explicit
+// scheme, extrapolates the window-start state; the next ones go from the accepted start to the
+// iterate's end. (Put at the iterate's end and moved on with its velocity, the wall ran a whole
+// window ahead of the solid.)
+TEST(CouplingRun, AResolvedSolidsWallGoesFromTheAcceptedStartToTheIterate) {
+  const int64_t run_id = 5108;
+  auto scene = make_scene(6);
+  scene.coupling.scheme = "serial-implicit";
+  scene.coupling.implicit.acceleration = scenario::Acceleration::none;
+  scene.coupling.implicit.max_iterations = 3;
+  scene.coupling.interface.resolved_plants = true;
+  const double dt = scene.coupling.window, speed = 5.0, step = 0.002;  // step / dt = 2 m/s
+  // The solid's end of window k, whatever the flow does: x_k = (step k, 0, 0.01 i), v = speed.
+  auto position = [&](int64_t k, int i) { return Eigen::Vector3d(step * k, 0.0, 0.01 * i); };
+  struct Seen {
+    int64_t window;
+    int32_t iteration;
+    std::vector<Eigen::Vector3d> start, velocity;
+  };
+  std::vector<Seen> seen;
+  CouplerOptions coupler_options;
+  coupler_options.url = run_lcm_url(run_id);
+  coupler_options.run_id = run_id;
+  Coupler coupler(scene, coupler_options);
+  std::thread flow([&] {
+    auto opts = options("prescribed_flow", run_id, 0.0);
+    opts.rollback = true;
+    Participant participant(opts);
+    participant.declare(FrameDeclaration{}.to_json());
+    FlowLink link(participant, scene);
+    while (true) {
+      const auto window = participant.next_window();
+      if (window.finish) {
+        participant.finished("{}");
+        return;
+      }
+      for (const auto& solid : link.receive_solids(window)) {
+        if (window.dt > 0.0) {
+          seen.push_back({window.index, window.iteration, solid.path_start, solid.path_velocity});
+        }
+        const std::vector<Eigen::Vector3d> zero(solid.positions.size(), Eigen::Vector3d::Zero());
+        link.publish_samples(solid.name, zero, std::vector<double>(zero.size(), 1.0));
+        link.publish_fluid_load(solid.name, zero);
+      }
+      participant.done(1);
+    }
+  });
+  std::thread solid([&] {
+    auto opts = options("vegetation_beam", run_id, 0.0);
+    opts.rollback = true;
+    Participant participant(opts);
+    participant.declare(FrameDeclaration{}.to_json());
+    SolidLink link(participant, scene, 3);
+    while (true) {
+      const auto window = participant.next_window();
+      if (window.finish) {
+        participant.finished("{}");
+        return;
+      }
+      if (window.index > 0) link.ambient(window);
+      std::vector<Eigen::Vector3d> x, v(3, Eigen::Vector3d(speed, 0.0, 0.0));
+      for (int i = 0; i < 3; ++i) x.push_back(position(window.index, i));
+      link.publish_state(x, v, std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
+      participant.done(1);
+    }
+  });
+  ProcessGroup none;
+  const auto result = coupler.run(none);
+  flow.join();
+  solid.join();
+  ASSERT_TRUE(result.ok) << result.failure;
+  int later_iterations = 0;
+  for (const auto& s : seen) {
+    ASSERT_EQ(s.start.size(), 3u);
+    ASSERT_EQ(s.velocity.size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+      const std::string where =
+          "window " + std::to_string(s.window) + " iteration " + std::to_string(s.iteration);
+      EXPECT_LT((s.start[i] - position(s.window - 1, i)).norm(), 1e-15) << where;
+      const Eigen::Vector3d expected =
+          s.iteration == 0
+              ? Eigen::Vector3d(speed, 0.0, 0.0)
+              : Eigen::Vector3d((position(s.window, i) - position(s.window - 1, i)) / dt);
+      EXPECT_LT((s.velocity[i] - expected).norm(), 1e-12) << where;
+    }
+    if (s.iteration > 0) ++later_iterations;
+  }
+  EXPECT_GE(later_iterations, 6) << "every window iterates at least twice";
+}
+
 }  // namespace
 }  // namespace cosim::coupler

@@ -157,6 +157,31 @@ TEST(ImplicitCoupling, WindowsConvergeWithTheirIterationsInTheSummary) {
 
 // The limit: with at_max_iterations: stop, a window that cannot converge in its iterations
 // stops the run naming the window.
+// The plant's tip series (tips.csv, tip_heights.csv) get one row per tip time: the rows are
+// written once the coupler accepted the window, not by every iteration (before, a window that
+// took three iterations wrote its row three times, and a mean over the file weighted each time
+// by its iteration count).
+TEST(ImplicitCoupling, TipSeriesHoldOneRowPerTime) {
+  const auto run = run_light_blade("tips",
+                                   "--set duration=0.05 --set coupling.scheme=serial-implicit "
+                                   "--set coupling.implicit.acceleration=iqn-ils "
+                                   "--set participants.vegetation_beam.canopy.streamwise=[1,0,0] "
+                                   "--set participants.vegetation_beam.canopy.tip_interval=0.01");
+  ASSERT_FALSE(run.folder.empty());
+  ASSERT_TRUE(run.summary["ok"].get<bool>()) << run.summary.dump(2);
+  EXPECT_GT(run.summary["implicit"]["iterations_max"].get<int>(), 1);  // windows did iterate
+  for (const char* file : {"tips.csv", "tip_heights.csv"}) {
+    std::ifstream csv(run.folder / "vegetation_beam" / file);
+    ASSERT_TRUE(csv) << file;
+    std::string line;
+    std::getline(csv, line);  // header
+    std::vector<std::string> times;
+    while (std::getline(csv, line)) times.push_back(line.substr(0, line.find(',')));
+    const std::vector<std::string> expected = {"0", "0.01", "0.02", "0.03", "0.04", "0.05"};
+    EXPECT_EQ(times, expected) << file;
+  }
+}
+
 TEST(ImplicitCoupling, AWindowAtTheLimitStopsTheRunWhenAskedTo) {
   const auto runs = fresh_folder("implicit-stop");
   const auto result = run_cosim(

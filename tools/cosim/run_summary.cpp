@@ -63,6 +63,7 @@ nlohmann::json summary_of(const scenario::Scene& scene, const RunRequest& reques
         {"iterations_mean", its.empty() ? 0.0 : static_cast<double>(total) / its.size()},
         {"iterations_max", its.empty() ? 0 : *std::max_element(its.begin(), its.end())},
         {"windows_at_max_iterations", result.windows_at_max_iterations},
+        {"aitken_restarts", result.aitken_restarts},
         {"iterations_per_window", its}};
   }
   summary["injected_loss"] = request.loss_probability;

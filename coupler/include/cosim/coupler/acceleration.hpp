@@ -44,6 +44,14 @@ struct AccelerationOptions {
   // iteration's step, so that a least-squares fit to noisy differences (a solver whose answer is
   // not smooth in its input) cannot send the solvers an input far from any they answered.
   double max_step = 0.0;
+  // Aitken: a factor that comes out zero or negative is replaced by `relaxation`. Where the map's
+  // Jacobian has no eigenvalue above 1 (a light structure's added mass makes them negative), the
+  // factor that contracts it is positive; a secant through two iterates gives a non-positive one
+  // only where the map is not the affine map the secant assumes (a window whose answer is strongly
+  // nonlinear, such as a surge striking a light blade), and a step back along the residual then
+  // sends the solvers further out. Off: preCICE's plain Aitken, which a map with an eigenvalue
+  // above 1 needs (its fixed point lies behind the iterate).
+  bool positive_aitken = false;
 };
 
 class Accelerator {
@@ -63,6 +71,7 @@ class Accelerator {
   int64_t filtered_columns() const { return filtered_; }
   int64_t bounded_steps() const { return bounded_; }  // updates shortened by max_step so far
   double aitken_factor() const { return omega_; }
+  int64_t aitken_restarts() const { return aitken_restarts_; }  // by positive_aitken so far
 
  private:
   Eigen::VectorXd iqn_step(const Eigen::VectorXd& x, const Eigen::VectorXd& h,
@@ -78,6 +87,7 @@ class Accelerator {
   std::deque<Eigen::VectorXd> w_;
   std::deque<std::pair<std::vector<Eigen::VectorXd>, std::vector<Eigen::VectorXd>>> kept_;
   int64_t filtered_ = 0;
+  int64_t aitken_restarts_ = 0;
   int64_t bounded_ = 0;
 };
 

@@ -68,6 +68,7 @@ struct RunResult {
   std::vector<int> iterations;
   int64_t windows_at_max_iterations = 0;
   std::string acceleration;
+  int64_t aitken_restarts = 0;  // coupling.implicit.positive_aitken: factors set back
   // Every iteration's convergence measure, as preCICE's convergence log: each exchanged field's
   // residual |H(x) - x| over its tolerance (<= 1: converged), fields named "drag of
   // vegetation_beam" in `convergence_fields`' order. summary.json's neighbour

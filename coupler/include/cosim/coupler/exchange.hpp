@@ -56,6 +56,24 @@ inline bool resolved_by_flow(bool resolved_plants, const std::string& solid) {
   return resolved_plants && solid == "vegetation_beam";
 }
 
+// The path a flow moves a solid it resolves along (its wall particles) through window k, from
+// `start` with a constant `velocity`. Explicit schemes, and the first iteration of an implicit
+// window, know only the window-start state (x_{k-1}, v_{k-1}): the wall moves on with it. Later
+// implicit iterations know the iterate's window-end positions x_k as well: the wall then goes
+// from the accepted window-start positions to them, velocity (x_k - x_{k-1}) / dt, so that the
+// fluid and the solid agree on where the solid is at both ends of a converged window (placed at
+// x_k and moved on with v_k, the wall would run a whole window ahead of the solid).
+struct ResolvedPath {
+  Eigen::Vector3d start;
+  Eigen::Vector3d velocity;
+};
+inline ResolvedPath resolved_path(const Eigen::Vector3d& start_position,
+                                  const Eigen::Vector3d& start_velocity,
+                                  const Eigen::Vector3d* end_position, double dt) {
+  if (end_position == nullptr || !(dt > 0.0)) return {start_position, start_velocity};
+  return {start_position, (*end_position - start_position) / dt};
+}
+
 // Window of the solids' data the flow uses in window `flow_window`.
 inline int64_t solid_window_for_flow(int64_t flow_window) {
   return std::max<int64_t>(flow_window - 1, 0);

@@ -69,6 +69,11 @@ struct SolidForcing {
   // reaction either: its own pressure then carries the solids' weight (locally averaged
   // equations; the solids' buoyancy is the -V grad p of that pressure).
   std::vector<double> volumes;
+  // coupling.resolved_plants, for a solid the flow resolves (FlowLink::resolves; empty
+  // otherwise): each point's path through the window (exchange::resolved_path), in the flow's
+  // coordinates.
+  std::vector<Eigen::Vector3d> path_start;
+  std::vector<Eigen::Vector3d> path_velocity;
 };
 
 // The flow's side of the exchange. It holds the exchange rules, so every flow provider follows

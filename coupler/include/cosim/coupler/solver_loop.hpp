@@ -25,6 +25,10 @@ class Solver {
   virtual double output_time() const = 0;
   // One output frame of the current state.
   virtual void write_output() {}
+  // The window just advanced is final: explicit schemes at once, implicit ones once the coupler
+  // accepted it (its last iteration's state is current). Records written once a window (a CSV
+  // row) belong here, not in advance(), which an implicit scheme runs once an iteration.
+  virtual void window_accepted() {}
   // After the last window: final outputs and the metrics report.
   virtual void finish(MetricsReport& report) = 0;
   // The full state after the window just done (physics through its library's checkpoint code,

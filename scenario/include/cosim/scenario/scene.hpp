@@ -42,6 +42,7 @@ struct ImplicitSettings {
   int reuse_windows = 0;
   double filter = 1e-10;
   double max_step = 0;  // 0: unbounded
+  bool positive_aitken = false;
 };
 
 template <class P, class V>
@@ -86,6 +87,10 @@ void visit_parameters(P& p, V& v) {
         .doc("aitken, iqn-ils: an update x_next - x longer than this times the residual |H(x) - x| "
              "(in the scaled fields) is shortened to it, along its direction (0: unbounded)"),
     p.max_step);
+  v(Key("positive_aitken")
+        .doc("aitken: a factor that comes out zero or negative starts again from relaxation "
+             "(maps with no eigenvalue above 1, as the added mass of a light structure gives)"),
+    p.positive_aitken);
   v(Key("filter")
         .in(Range::between(0.0, 1.0))
         .doc("iqn-ils: drop a column whose part orthogonal to newer ones is below this times its "
