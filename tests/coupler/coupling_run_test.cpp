@@ -44,18 +44,29 @@ ParticipantOptions options(const std::string& name, int64_t run_id, double loss)
   return participant;
 }
 
+// Answers every window with `answer` until the coupler asks for the finish (or aborts the run).
+void serve_windows(Participant& participant, const std::function<void(const Window&)>& answer) {
+  try {
+    while (true) {
+      const auto window = participant.next_window();
+      if (window.finish) {
+        participant.finished("{}");
+        return;
+      }
+      answer(window);
+    }
+  } catch (const CouplingError&) {
+    // the coupler aborted the run
+  }
+}
+
 // The flow answers with a velocity that depends on where the points are, and the solid moves
 // with it: a wrong or stale value anywhere changes the final state.
 void run_flow(const scenario::Scene& scene, int64_t run_id, double loss) {
   Participant participant(options("prescribed_flow", run_id, loss));
   participant.declare(FrameDeclaration{}.to_json());
   FlowLink link(participant, scene);
-  while (true) {
-    const auto window = participant.next_window();
-    if (window.finish) {
-      participant.finished("{}");
-      return;
-    }
+  serve_windows(participant, [&](const Window& window) {
     for (const auto& solid : link.receive_solids(window)) {
       std::vector<Eigen::Vector3d> velocity;
       for (const auto& position : solid.positions) {
@@ -64,7 +75,7 @@ void run_flow(const scenario::Scene& scene, int64_t run_id, double loss) {
       link.publish_samples(solid.name, velocity, std::vector<double>(velocity.size(), 1.0));
     }
     participant.done(1);
-  }
+  });
 }
 
 std::vector<Eigen::Vector3d> run_solid(const scenario::Scene& scene, int64_t run_id, double loss) {
@@ -232,22 +243,6 @@ struct AdaptiveOutcome {
   int grants_missed = 0;          // windows in which the flow's grant of k + 1 never came
 };
 
-// Answers every window with `answer` until the coupler asks for the finish (or aborts the run).
-void serve_windows(Participant& participant, const std::function<void(const Window&)>& answer) {
-  try {
-    while (true) {
-      const auto window = participant.next_window();
-      if (window.finish) {
-        participant.finished("{}");
-        return;
-      }
-      answer(window);
-    }
-  } catch (const CouplingError&) {
-    // the coupler aborted the run
-  }
-}
-
 double flow_stable_dt(int64_t window) {
   return 1e-3 / (1.0 + 0.05 * static_cast<double>(window));
 }
@@ -361,12 +356,7 @@ TEST(CouplingRun, AResolvedSolidsWallGoesFromTheAcceptedStartToTheIterate) {
     Participant participant(opts);
     participant.declare(FrameDeclaration{}.to_json());
     FlowLink link(participant, scene);
-    while (true) {
-      const auto window = participant.next_window();
-      if (window.finish) {
-        participant.finished("{}");
-        return;
-      }
+    serve_windows(participant, [&](const Window& window) {
       for (const auto& solid : link.receive_solids(window)) {
         if (window.dt > 0.0) {
           seen.push_back({window.index, window.iteration, solid.path_start, solid.path_velocity});
@@ -376,7 +366,7 @@ TEST(CouplingRun, AResolvedSolidsWallGoesFromTheAcceptedStartToTheIterate) {
         link.publish_fluid_load(solid.name, zero);
       }
       participant.done(1);
-    }
+    });
   });
   std::thread solid([&] {
     auto opts = options("vegetation_beam", run_id, 0.0);
@@ -384,18 +374,13 @@ TEST(CouplingRun, AResolvedSolidsWallGoesFromTheAcceptedStartToTheIterate) {
     Participant participant(opts);
     participant.declare(FrameDeclaration{}.to_json());
     SolidLink link(participant, scene, 3);
-    while (true) {
-      const auto window = participant.next_window();
-      if (window.finish) {
-        participant.finished("{}");
-        return;
-      }
+    serve_windows(participant, [&](const Window& window) {
       if (window.index > 0) link.ambient(window);
       std::vector<Eigen::Vector3d> x, v(3, Eigen::Vector3d(speed, 0.0, 0.0));
       for (int i = 0; i < 3; ++i) x.push_back(position(window.index, i));
       link.publish_state(x, v, std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
       participant.done(1);
-    }
+    });
   });
   ProcessGroup none;
   const auto result = coupler.run(none);
