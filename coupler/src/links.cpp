@@ -135,20 +135,19 @@ std::vector<SolidForcing> FlowLink::receive_solids(const Window& window, bool wi
     SolidForcing state;
     state.name = name;
     if (resolves(name)) {
-      // The accepted window-start state, as iteration 0 read it (exchange::resolved_path).
-      std::vector<Eigen::Vector3d> start = positions, start_velocity = velocities;
+      // Explicit, iteration 0: positions and velocities are the window-start state. Later
+      // iterations: they are the iterate's end; the start is the accepted window-start
+      // positions, as iteration 0 read them (exchange::resolved_path; the velocities then unused).
+      std::vector<Eigen::Vector3d> start = positions;
       if (relaxed) {
         const int64_t previous = exchange::solid_window_for_flow(window.index);
-        auto start_field = [&](const char* field_name) {
-          return exchange::unpack(
-              participant_.receive(name, field_name, previous, window.accepted_iteration), count,
-              fmt::format("field '{}' from '{}' (window {})", field_name, name, previous));
-        };
-        start = start_field(exchange::kPositions);
-        start_velocity = start_field(exchange::kVelocities);
+        start = exchange::unpack(
+            participant_.receive(name, exchange::kPositions, previous, window.accepted_iteration),
+            count,
+            fmt::format("field '{}' from '{}' (window {})", exchange::kPositions, name, previous));
       }
       for (std::size_t i = 0; i < count; ++i) {
-        const auto path = exchange::resolved_path(start[i], start_velocity[i],
+        const auto path = exchange::resolved_path(start[i], velocities[i],
                                                   relaxed ? &positions[i] : nullptr, window.dt);
         state.path_start.push_back(frame_.to_solver(path.start));
         state.path_velocity.push_back(frame_.to_solver(path.velocity));
