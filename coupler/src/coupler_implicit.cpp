@@ -63,7 +63,8 @@ class Coupler::ImplicitWindows {
         settings_(coupler.scene_.coupling.implicit),
         serial_(coupler.scene_.coupling.is_serial()),
         accelerator_(acceleration_options(settings_)),
-        flow_(coupler.scene_.flow()) {
+        flow_(coupler.scene_.flow()),
+        resolved_plants_(coupler.scene_.coupling.interface.resolved_plants) {
     result_.acceleration = acceleration_name(accelerator_.options().kind);
     for (const auto* solid : c_.scene_.solids()) solids_.push_back(solid->acts_as);
     blocks_ = iterated_blocks();
@@ -141,8 +142,7 @@ class Coupler::ImplicitWindows {
       // One scale per window (from its first answer), so the accelerator's columns of one
       // window are differences in the same units.
       if (iteration == 0) scales = block_scales(blocks_, h);
-      const Eigen::VectorXd next =
-          accelerator_.next(x.cwiseQuotient(scales), h.cwiseQuotient(scales)).cwiseProduct(scales);
+      const Eigen::VectorXd next = accelerate(x, h, scales);
       if (!next.allFinite()) {
         throw Failure(fmt::format("the coupling iteration of {} diverged (iteration {}: {})",
                                   c_.window_text(index), iteration, measure.worst_field));
@@ -150,6 +150,26 @@ class Coupler::ImplicitWindows {
       x = next;
       publish_input(index, iteration + 1, x, iteration);
     }
+  }
+
+  // The next input: the accelerated blocks from the accelerator (in the scaled units), the
+  // others as the senders answered.
+  Eigen::VectorXd accelerate(const Eigen::VectorXd& x, const Eigen::VectorXd& h,
+                             const Eigen::VectorXd& scales) {
+    const auto entries = accelerated_entries(blocks_);
+    const auto count = static_cast<Eigen::Index>(entries.size());
+    Eigen::VectorXd xa(count), ha(count), sa(count);
+    for (Eigen::Index j = 0; j < count; ++j) {
+      const auto e = entries[static_cast<std::size_t>(j)];
+      xa(j) = x(e);
+      ha(j) = h(e);
+      sa(j) = scales(e);
+    }
+    const Eigen::VectorXd na =
+        accelerator_.next(xa.cwiseQuotient(sa), ha.cwiseQuotient(sa)).cwiseProduct(sa);
+    Eigen::VectorXd next = h;
+    for (Eigen::Index j = 0; j < count; ++j) next(entries[static_cast<std::size_t>(j)]) = na(j);
+    return next;
   }
 
   // One iteration of one window, granted until every participant's DONE is in.
@@ -216,6 +236,9 @@ class Coupler::ImplicitWindows {
         block.sender = solid;
         block.field = name;
         block.input = exchange::solid_field_for_flow(name, solid);
+        // A solid the flow resolves is read there by its positions alone (the wall's path).
+        block.accelerated = !exchange::resolved_by_flow(resolved_plants_, solid) ||
+                            name == std::string(exchange::kPositions);
         block.absolute = name == std::string(exchange::kPositions)    ? settings_.absolute_position
                          : name == std::string(exchange::kVelocities) ? settings_.absolute_velocity
                                                                       : settings_.absolute_force;
@@ -287,6 +310,7 @@ class Coupler::ImplicitWindows {
   const bool serial_;
   Accelerator accelerator_;
   const scenario::ParticipantEntry* flow_;
+  const bool resolved_plants_;
   std::vector<std::string> solids_;
   std::vector<FieldBlock> blocks_;
   int64_t first_ = 0;

@@ -49,4 +49,13 @@ Eigen::VectorXd block_scales(const std::vector<FieldBlock>& blocks,
   return scales;
 }
 
+std::vector<Eigen::Index> accelerated_entries(const std::vector<FieldBlock>& blocks) {
+  std::vector<Eigen::Index> entries;
+  for (const auto& block : blocks) {
+    if (!block.accelerated) continue;
+    for (Eigen::Index j = 0; j < block.size; ++j) entries.push_back(block.offset + j);
+  }
+  return entries;
+}
+
 }  // namespace cosim::coupler

@@ -14,6 +14,12 @@ struct FieldBlock {
   std::string field;      // its name there ("drag", "ambient_velocity@vegetation_beam")
   std::string input;      // the name the coupler publishes the next input under
   double absolute = 0.0;  // root-mean-square change below which it counts as converged [its unit]
+  // The receiver reads this block in the iterations after the first, so the accelerator
+  // relaxes it. A block nobody reads there (a resolved solid's velocities: the flow moves its
+  // wall along the positions, exchange::resolved_path) passes on as H(x): relaxing it would only
+  // hold back its convergence measure, which is then the change of the sender's answer between
+  // iterations.
+  bool accelerated = true;
   Eigen::Index offset = 0;
   Eigen::Index size = 0;
 };
@@ -37,5 +43,8 @@ ConvergenceMeasure measure_convergence(const std::vector<FieldBlock>& blocks,
 // a comparable weight in the accelerator's least-squares problem.
 Eigen::VectorXd block_scales(const std::vector<FieldBlock>& blocks,
                              const Eigen::VectorXd& reference);
+
+// The entries of the accelerated blocks, in block order (FieldBlock::accelerated).
+std::vector<Eigen::Index> accelerated_entries(const std::vector<FieldBlock>& blocks);
 
 }  // namespace cosim::coupler
