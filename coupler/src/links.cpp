@@ -35,6 +35,26 @@ void SolidLink::publish_state(std::span<const Eigen::Vector3d> positions,
   }
 }
 
+void SolidLink::publish_window_state(std::span<const Eigen::Vector3d> start, double dt,
+                                     std::span<const Eigen::Vector3d> positions,
+                                     std::span<const Eigen::Vector3d> velocities,
+                                     std::span<const Eigen::Vector3d> drag,
+                                     std::span<const double> volumes) {
+  if (!resolved_ || !implicit_) {
+    publish_state(positions, velocities, drag, volumes);
+    return;
+  }
+  if (start.size() != positions.size()) {
+    throw CouplingError(fmt::format("'{}': {} window-start positions for {} points",
+                                    participant_.name(), start.size(), positions.size()));
+  }
+  std::vector<Eigen::Vector3d> mean(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    mean[i] = exchange::resolved_velocity(start[i], positions[i], velocities[i], dt);
+  }
+  publish_state(positions, mean, drag, volumes);
+}
+
 AmbientFlow SolidLink::receive(const std::string& sender, int64_t flow_window, int32_t iteration) {
   const auto key = std::tuple(sender, flow_window, iteration);
   if (const auto cached = cache_.find(key); cached != cache_.end()) return cached->second;

@@ -180,6 +180,7 @@ class VegetationProcess final : public coupler::Solver {
     }
     field_.set_water_fraction(water_);
     if (resolved_) apply_fluid_load(window, end.fluid_load);
+    const std::vector<Eigen::Vector3d> start = field_.positions();
     const auto step = field_.advance(window.dt, begin.velocity, end.velocity);
     node_substeps_ += static_cast<int64_t>(step.substeps) * static_cast<int64_t>(node_count_);
     most_substeps_ = std::max(most_substeps_, step.substeps);
@@ -191,7 +192,8 @@ class VegetationProcess final : public coupler::Solver {
     drag_impulse_ += last_drag_impulse_;
     record_tip();
     observe_canopy();
-    link_.publish_state(field_.positions(), field_.velocities(), field_.window_mean_drag());
+    link_.publish_window_state(start, window.dt, field_.positions(), field_.velocities(),
+                               field_.window_mean_drag());
     return {step.substeps, 0.0};
   }
 

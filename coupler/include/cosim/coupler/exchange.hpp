@@ -74,6 +74,23 @@ inline ResolvedPath resolved_path(const Eigen::Vector3d& start_position,
   return {start_position, (*end_position - start_position) / dt};
 }
 
+// The velocity a solid the flow resolves hands the flow at the end of an implicit window: the
+// mean over the window, (x_k - x_{k-1}) / dt, not the point's velocity at that instant. The
+// first iteration of the next window extrapolates the wall with it, which is the linear
+// extrapolation of the converged positions preCICE starts a window from; the instant's velocity
+// also carries vibrations far faster than the fluid's step (a light blade flapping on the bed,
+// 2 ms windows: nodes at 0.4-2.3 m/s at a window's end while they moved 0.005 m/s on average),
+// and extrapolated it swept the wall millimetres into the water. Explicit schemes keep the
+// instant's velocity: their wall never meets the solid again within the window, and the Taylor
+// step x + v dt ends closer to it (light_blade_bed at 0.5 ms windows: at most 1.49 mm off,
+// against 3.49 mm with the mean).
+inline Eigen::Vector3d resolved_velocity(const Eigen::Vector3d& start_position,
+                                         const Eigen::Vector3d& end_position,
+                                         const Eigen::Vector3d& end_velocity, double dt) {
+  if (!(dt > 0.0)) return end_velocity;
+  return (end_position - start_position) / dt;
+}
+
 // Window of the solids' data the flow uses in window `flow_window`.
 inline int64_t solid_window_for_flow(int64_t flow_window) {
   return std::max<int64_t>(flow_window - 1, 0);

@@ -39,6 +39,14 @@ class SolidLink {
   void publish_state(std::span<const Eigen::Vector3d> positions,
                      std::span<const Eigen::Vector3d> velocities,
                      std::span<const Eigen::Vector3d> drag, std::span<const double> volumes = {});
+  // The same at the end of a window of length `dt` that started at `start` (the positions the
+  // solid had then). Under an implicit scheme a solid the flow resolves hands it its window-mean
+  // velocity instead of `velocities` (exchange::resolved_velocity).
+  void publish_window_state(std::span<const Eigen::Vector3d> start, double dt,
+                            std::span<const Eigen::Vector3d> positions,
+                            std::span<const Eigen::Vector3d> velocities,
+                            std::span<const Eigen::Vector3d> drag,
+                            std::span<const double> volumes = {});
   // The flow at the start and the end of `window` (index >= 1). Without a flow provider in the
   // scene: still and dry.
   std::pair<AmbientFlow, AmbientFlow> ambient(const Window& window);
