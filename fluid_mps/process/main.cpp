@@ -363,14 +363,6 @@ class FluidProcess final : public coupler::Solver {
             resolved_wall_gap_, (system_->positions()[blade_[k]] - solid.path_start[k]).norm());
       }
     }
-    if (std::getenv("DEBUG_BLADE")) {
-      std::string text;
-      for (std::size_t k = 0; k < blade_.size(); ++k)
-        text += fmt::format(" ({:.5f},{:.5f} v {:.3f},{:.3f})", solid.path_start[k].x(),
-                            solid.path_start[k].y(), solid.path_velocity[k].x(),
-                            solid.path_velocity[k].y());
-      spdlog::warn("BLADE w{} i{}:{}", window.index, window.iteration, text);
-    }
     std::vector<mps::PartitionSegment> segments;
     const auto& start = solid.path_start;
     for (std::size_t k = 0; k < blade_.size(); ++k) {

@@ -1,16 +1,15 @@
 // coupling.resolved_plants through `cosim run`: the light blade stood in the 2D MPS fluid as a
 // moving line of wall particles, its fluid load the pressure difference across it. The blade is
 // some 200 times lighter than the water it moves, and serial-explicit coupling diverges once the
-// surge reaches it: the run stops naming the participant, the window and the quantity. One
-// coupling iteration per window of serial-implicit is the explicit scheme bit for bit (the
-// blade's wall particles survive the rollback). A scene that cannot resolve its plants is refused
-// before anything starts, with its file, line and key.
+// surge reaches it: the run stops naming the participant, the window and the quantity;
+// serial-implicit coupling with the same windows converges, and the fluid's wall ends each window
+// where the blade does (its wall particles survive the rollbacks). A scene that cannot resolve its
+// plants is refused before anything starts, with its file, line and key.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -42,35 +41,36 @@ TEST(ResolvedPlants, SerialExplicitCouplingDivergesAndStopsNamingTheLimit) {
   EXPECT_LT(summary["windows_completed"].get<int>(), 150);
 }
 
-TEST(ResolvedPlants, OneIterationPerWindowIsTheSerialExplicitSchemeBitForBit) {
-  const auto explicit_run = run_resolved("short-explicit", "--set duration=0.12");
-  const auto one = run_resolved("short-one",
-                                "--set duration=0.12 "
-                                "--set coupling.scheme=serial-implicit "
-                                "--set coupling.implicit.max_iterations=1");
-  ASSERT_EQ(explicit_run.exit_code, 0) << explicit_run.output;
-  ASSERT_EQ(one.exit_code, 0) << one.output;
-  const auto a = run_folder_of(explicit_run), b = run_folder_of(one);
-  for (const char* file : {"vegetation_beam/plants.h5", "fluid_mps/particles.h5"}) {
-    const int count = output::count_point_frames(a / file);
-    ASSERT_GT(count, 1) << file;
-    ASSERT_EQ(output::count_point_frames(b / file), count) << file;
-    for (int i = 0; i < count; ++i) {
-      const auto x = output::read_point_frame(a / file, i).positions;
-      const auto y = output::read_point_frame(b / file, i).positions;
-      ASSERT_EQ(x.size(), y.size()) << file << " frame " << i;
-      EXPECT_EQ(std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])), 0)
-          << file << " frame " << i;
-    }
-  }
-  // The blade was loaded by the water before 0.12 s.
-  const auto load = info_of(read_summary(a), "vegetation_beam")["fluid_load_impulse"];
+// Serial-implicit with Aitken from 0.01 (below 1 / (1 + m_a / m_s)) and a 1 % tolerance runs the
+// 150 windows explicit coupling cannot. Each converged window's fluid wall ends where the blade
+// ended it (resolved_wall_gap: the largest distance over the run, at the next window's start).
+// Measured (December 2026): 5.34 iterations a window, 1 window at the limit of 50, largest gap
+// 2.6e-11 m. (Before, velocities relaxed with the positions and the instant's velocity
+// extrapolated, the one-iteration form of this run was the explicit scheme bit for bit; now a
+// window starts from the blade's window-mean velocity, exchange::resolved_velocity.)
+TEST(ResolvedPlants, SerialImplicitCouplingConvergesWhereExplicitDiverges) {
+  const auto result = run_resolved("implicit",
+                                   "--set coupling.scheme=serial-implicit "
+                                   "--set coupling.implicit.acceleration=aitken "
+                                   "--set coupling.implicit.relaxation=0.01 "
+                                   "--set coupling.implicit.relative_tolerance=1e-2 "
+                                   "--set coupling.implicit.max_iterations=50");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const auto summary = read_summary(run_folder_of(result));
+  EXPECT_EQ(summary["windows_completed"].get<int>(), 150);
+  const auto& implicit = summary["implicit"];
+  EXPECT_LE(implicit["windows_at_max_iterations"].get<int>(), 5);
+  EXPECT_LT(implicit["iterations_mean"].get<double>(), 10.0);
+  const auto info = info_of(summary, "fluid_mps");
+  EXPECT_LT(info["resolved_wall_gap"].get<double>(), 1e-6);
+  // The water reached the blade and loaded it.
+  const auto load = info_of(summary, "vegetation_beam")["fluid_load_impulse"];
   EXPECT_GT(std::abs(load[0].get<double>()), 0.0);
 }
 
 // A blade resolved in water that is already there: the fluid makes room for it (0.9 l0) and the
-// channel stays calm enough to run. Before, the two lattice columns beside the blade were crowded to several
-// times n0 and thrown out at 6 m/s; a particle escaped at t = 0.076 s.
+// channel stays calm enough to run. Before, the two lattice columns beside the blade were crowded
+// to several times n0 and thrown out at 6 m/s; a particle escaped at t = 0.076 s.
 TEST(ResolvedPlants, ABladeStandingInWaterFromTheStartLeavesItCalm) {
   const auto result =
       run_cosim(fmt::format("run {} --runs-dir {} --quiet", test_scene("blade_in_channel").string(),
