@@ -109,10 +109,12 @@ inline FlowWindows flow_windows_for_solid(int64_t solid_window, bool serial_sche
 // Implicit schemes (serial-implicit, parallel-implicit) iterate window k: iteration i >= 1 runs
 // again from the state at the window start. Iteration 0 reads what the explicit scheme reads
 // (window k-1 taken at the iteration the coupler accepted for it), so with one iteration per
-// window an implicit scheme gives the explicit one's results. In iteration i >= 1 the flow reads
-// the coupler's fields of (k, i), "positions@S", "velocities@S", "drag@S" (and "volumes@S"):
-// the solids' window k, relaxed by the coupler's accelerator, its drag acting over window k
-// itself (no lag, no rescaling). A solid reads the flow's (k-1, accepted) at the window start
+// window an implicit scheme gives the explicit one's results (except for a solid the flow
+// resolves, whose velocity is then its window mean: resolved_velocity). In iteration i >= 1 the
+// flow reads the coupler's fields of (k, i), "positions@S", "velocities@S", "drag@S" (and
+// "volumes@S"): the solids' window k, the fields the flow reads relaxed by the coupler's
+// accelerator (a resolved solid's positions only; its velocities and drag as it answered), its
+// drag acting over window k itself (no lag, no rescaling). A solid reads the flow's (k-1, accepted) at the window start
 // and, at the end, the flow's (k, i) in the serial scheme, or in the parallel one the coupler's
 // (k, i) samples (the flow's window k, relaxed; iteration 0: the window start held constant).
 inline constexpr const char* kCoupler = "coupler";
