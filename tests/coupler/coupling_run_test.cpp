@@ -325,6 +325,61 @@ TEST(CouplingRun, AStableDtFromAParticipantThatDeclaredNoLimitStopsTheRun) {
       << outcome.result.failure;
 }
 
+// A run of `scene` with a flow and a three-point resolved solid in two threads (rolling back
+// under an implicit scheme): the flow hands `seen` each solid's view of every window it runs and
+// answers with zero samples and loads; the solid publishes what `state` gives for the window.
+struct SolidAnswer {
+  std::vector<Eigen::Vector3d> start, end, velocity;  // start empty: publish_state
+};
+RunResult run_resolved_solid(const scenario::Scene& scene, int64_t run_id,
+                             const std::function<void(const Window&, const SolidForcing&)>& seen,
+                             const std::function<SolidAnswer(const Window&)>& state) {
+  const bool rollback = scene.coupling.scheme.find("implicit") != std::string::npos;
+  CouplerOptions coupler_options;
+  coupler_options.url = run_lcm_url(run_id);
+  coupler_options.run_id = run_id;
+  Coupler coupler(scene, coupler_options);
+  std::thread flow([&] {
+    auto opts = options("prescribed_flow", run_id, 0.0);
+    opts.rollback = rollback;
+    Participant participant(opts);
+    participant.declare(FrameDeclaration{}.to_json());
+    FlowLink link(participant, scene);
+    serve_windows(participant, [&](const Window& window) {
+      for (const auto& solid : link.receive_solids(window)) {
+        seen(window, solid);
+        const std::vector<Eigen::Vector3d> zero(solid.positions.size(), Eigen::Vector3d::Zero());
+        link.publish_samples(solid.name, zero, std::vector<double>(zero.size(), 1.0));
+        link.publish_fluid_load(solid.name, zero);
+      }
+      participant.done(1);
+    });
+  });
+  std::thread solid([&] {
+    auto opts = options("vegetation_beam", run_id, 0.0);
+    opts.rollback = rollback;
+    Participant participant(opts);
+    participant.declare(FrameDeclaration{}.to_json());
+    SolidLink link(participant, scene, 3);
+    serve_windows(participant, [&](const Window& window) {
+      if (window.index > 0) link.ambient(window);
+      const auto answer = state(window);
+      const std::vector<Eigen::Vector3d> drag(answer.end.size(), Eigen::Vector3d::Zero());
+      if (answer.start.empty()) {
+        link.publish_state(answer.end, answer.velocity, drag);
+      } else {
+        link.publish_window_state(answer.start, window.dt, answer.end, answer.velocity, drag);
+      }
+      participant.done(1);
+    });
+  });
+  ProcessGroup none;
+  const auto result = coupler.run(none);
+  flow.join();
+  solid.join();
+  return result;
+}
+
 // coupling.resolved_plants under serial-implicit (exchange::resolved_path): the flow moves the
 // solid's wall from where the solid started the window. The first iteration, like the explicit
 // scheme, extrapolates the window-start state; the next ones go from the accepted start to the
@@ -346,46 +401,21 @@ TEST(CouplingRun, AResolvedSolidsWallGoesFromTheAcceptedStartToTheIterate) {
     std::vector<Eigen::Vector3d> start, velocity;
   };
   std::vector<Seen> seen;
-  CouplerOptions coupler_options;
-  coupler_options.url = run_lcm_url(run_id);
-  coupler_options.run_id = run_id;
-  Coupler coupler(scene, coupler_options);
-  std::thread flow([&] {
-    auto opts = options("prescribed_flow", run_id, 0.0);
-    opts.rollback = true;
-    Participant participant(opts);
-    participant.declare(FrameDeclaration{}.to_json());
-    FlowLink link(participant, scene);
-    serve_windows(participant, [&](const Window& window) {
-      for (const auto& solid : link.receive_solids(window)) {
+  const auto result = run_resolved_solid(
+      scene, run_id,
+      [&](const Window& window, const SolidForcing& solid) {
         if (window.dt > 0.0) {
           seen.push_back({window.index, window.iteration, solid.path_start, solid.path_velocity});
         }
-        const std::vector<Eigen::Vector3d> zero(solid.positions.size(), Eigen::Vector3d::Zero());
-        link.publish_samples(solid.name, zero, std::vector<double>(zero.size(), 1.0));
-        link.publish_fluid_load(solid.name, zero);
-      }
-      participant.done(1);
-    });
-  });
-  std::thread solid([&] {
-    auto opts = options("vegetation_beam", run_id, 0.0);
-    opts.rollback = true;
-    Participant participant(opts);
-    participant.declare(FrameDeclaration{}.to_json());
-    SolidLink link(participant, scene, 3);
-    serve_windows(participant, [&](const Window& window) {
-      if (window.index > 0) link.ambient(window);
-      std::vector<Eigen::Vector3d> x, v(3, Eigen::Vector3d(speed, 0.0, 0.0));
-      for (int i = 0; i < 3; ++i) x.push_back(position(window.index, i));
-      link.publish_state(x, v, std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
-      participant.done(1);
-    });
-  });
-  ProcessGroup none;
-  const auto result = coupler.run(none);
-  flow.join();
-  solid.join();
+      },
+      [&](const Window& window) {
+        SolidAnswer answer;
+        for (int i = 0; i < 3; ++i) {
+          answer.end.push_back(position(window.index, i));
+          answer.velocity.emplace_back(speed, 0.0, 0.0);
+        }
+        return answer;
+      });
   ASSERT_TRUE(result.ok) << result.failure;
   int later_iterations = 0;
   for (const auto& s : seen) {
@@ -431,47 +461,19 @@ TEST(CouplingRun, AResolvedSolidsVelocitiesPassOnAsTheSolidAnswered) {
     std::vector<Eigen::Vector3d> positions, velocities;
   };
   std::vector<Seen> seen;
-  CouplerOptions coupler_options;
-  coupler_options.url = run_lcm_url(run_id);
-  coupler_options.run_id = run_id;
-  Coupler coupler(scene, coupler_options);
-  std::thread flow([&] {
-    auto opts = options("prescribed_flow", run_id, 0.0);
-    opts.rollback = true;
-    Participant participant(opts);
-    participant.declare(FrameDeclaration{}.to_json());
-    FlowLink link(participant, scene);
-    serve_windows(participant, [&](const Window& window) {
-      for (const auto& solid : link.receive_solids(window)) {
+  const auto result = run_resolved_solid(
+      scene, run_id,
+      [&](const Window& window, const SolidForcing& solid) {
         seen.push_back({window.index, window.iteration, solid.positions, solid.velocities});
-        const std::vector<Eigen::Vector3d> zero(solid.positions.size(), Eigen::Vector3d::Zero());
-        link.publish_samples(solid.name, zero, std::vector<double>(zero.size(), 1.0));
-        link.publish_fluid_load(solid.name, zero);
-      }
-      participant.done(1);
-    });
-  });
-  std::thread solid([&] {
-    auto opts = options("vegetation_beam", run_id, 0.0);
-    opts.rollback = true;
-    Participant participant(opts);
-    participant.declare(FrameDeclaration{}.to_json());
-    SolidLink link(participant, scene, 3);
-    serve_windows(participant, [&](const Window& window) {
-      if (window.index > 0) link.ambient(window);
-      std::vector<Eigen::Vector3d> x, v;
-      for (int j = 0; j < 3; ++j) {
-        x.push_back(answer_position(window.index, window.iteration, j));
-        v.emplace_back(1.0 + window.iteration, 0.0, 0.0);
-      }
-      link.publish_state(x, v, std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
-      participant.done(1);
-    });
-  });
-  ProcessGroup none;
-  const auto result = coupler.run(none);
-  flow.join();
-  solid.join();
+      },
+      [&](const Window& window) {
+        SolidAnswer answer;
+        for (int j = 0; j < 3; ++j) {
+          answer.end.push_back(answer_position(window.index, window.iteration, j));
+          answer.velocity.emplace_back(1.0 + window.iteration, 0.0, 0.0);
+        }
+        return answer;
+      });
   ASSERT_TRUE(result.ok) << result.failure;
   int later_iterations = 0;
   std::vector<Eigen::Vector3d> input;  // the positions the flow read in the iteration before
@@ -505,54 +507,27 @@ std::vector<std::pair<int64_t, Eigen::Vector3d>> first_iteration_wall_velocities
   scene.coupling.implicit.acceleration = scenario::Acceleration::none;
   scene.coupling.implicit.max_iterations = 2;
   scene.coupling.interface.resolved_plants = true;
-  const bool implicit = scheme == "serial-implicit";
   auto position = [](int64_t k) { return Eigen::Vector3d(0.002 * static_cast<double>(k), 0, 0); };
   std::vector<std::pair<int64_t, Eigen::Vector3d>> seen;
-  CouplerOptions coupler_options;
-  coupler_options.url = run_lcm_url(run_id);
-  coupler_options.run_id = run_id;
-  Coupler coupler(scene, coupler_options);
-  std::thread flow([&] {
-    auto opts = options("prescribed_flow", run_id, 0.0);
-    opts.rollback = implicit;
-    Participant participant(opts);
-    participant.declare(FrameDeclaration{}.to_json());
-    FlowLink link(participant, scene);
-    serve_windows(participant, [&](const Window& window) {
-      for (const auto& solid : link.receive_solids(window)) {
+  const auto result = run_resolved_solid(
+      scene, run_id,
+      [&](const Window& window, const SolidForcing& solid) {
         if (window.dt > 0.0 && window.iteration == 0) {
           seen.emplace_back(window.index, solid.path_velocity.at(0));
         }
-        const std::vector<Eigen::Vector3d> zero(solid.positions.size(), Eigen::Vector3d::Zero());
-        link.publish_samples(solid.name, zero, std::vector<double>(zero.size(), 1.0));
-        link.publish_fluid_load(solid.name, zero);
-      }
-      participant.done(1);
-    });
-  });
-  std::thread solid([&] {
-    auto opts = options("vegetation_beam", run_id, 0.0);
-    opts.rollback = implicit;
-    Participant participant(opts);
-    participant.declare(FrameDeclaration{}.to_json());
-    SolidLink link(participant, scene, 1);
-    serve_windows(participant, [&](const Window& window) {
-      if (window.index > 0) link.ambient(window);
-      const std::vector<Eigen::Vector3d> start{position(window.index - 1)},
-          end{position(window.index)}, vibrating{Eigen::Vector3d(5.0, 0.0, 0.0)},
-          drag{Eigen::Vector3d::Zero()};
-      if (window.index == 0) {
-        link.publish_state(end, std::vector<Eigen::Vector3d>{Eigen::Vector3d::Zero()}, drag);
-      } else {
-        link.publish_window_state(start, window.dt, end, vibrating, drag);
-      }
-      participant.done(1);
-    });
-  });
-  ProcessGroup none;
-  const auto result = coupler.run(none);
-  flow.join();
-  solid.join();
+      },
+      [&](const Window& window) {
+        SolidAnswer answer;
+        for (int j = 0; j < 3; ++j) {
+          answer.end.push_back(position(window.index) + Eigen::Vector3d(0, 0, 0.01 * j));
+          // Window 0 (no window behind it): at rest; later ones vibrate at their end.
+          answer.velocity.emplace_back(window.index == 0 ? 0.0 : 5.0, 0.0, 0.0);
+          if (window.index > 0) {
+            answer.start.push_back(position(window.index - 1) + Eigen::Vector3d(0, 0, 0.01 * j));
+          }
+        }
+        return answer;
+      });
   EXPECT_TRUE(result.ok) << result.failure;
   return seen;
 }

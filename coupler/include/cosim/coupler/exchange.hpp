@@ -114,9 +114,10 @@ inline FlowWindows flow_windows_for_solid(int64_t solid_window, bool serial_sche
 // flow reads the coupler's fields of (k, i), "positions@S", "velocities@S", "drag@S" (and
 // "volumes@S"): the solids' window k, the fields the flow reads relaxed by the coupler's
 // accelerator (a resolved solid's positions only; its velocities and drag as it answered), its
-// drag acting over window k itself (no lag, no rescaling). A solid reads the flow's (k-1, accepted) at the window start
-// and, at the end, the flow's (k, i) in the serial scheme, or in the parallel one the coupler's
-// (k, i) samples (the flow's window k, relaxed; iteration 0: the window start held constant).
+// drag acting over window k itself (no lag, no rescaling). A solid reads the flow's
+// (k-1, accepted) at the window start and, at the end, the flow's (k, i) in the serial scheme, or
+// in the parallel one the coupler's (k, i) samples (the flow's window k, relaxed; iteration 0:
+// the window start held constant).
 inline constexpr const char* kCoupler = "coupler";
 inline std::string solid_field_for_flow(const std::string& field, const std::string& solid) {
   return field + "@" + solid;
