@@ -9,7 +9,7 @@ endfunction()
 # Builds a GoogleTest executable and registers it with CTest as one test with a timeout.
 # PRIVATE_NETWORK runs it in its own network namespace (multi-process LCM tests).
 function(cosim_add_gtest)
-  cmake_parse_arguments(T "PRIVATE_NETWORK" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "PRIVATE_NETWORK" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;ARGS" ${ARGN})
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 120)
   endif()
@@ -18,9 +18,9 @@ function(cosim_add_gtest)
   target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
   if(T_PRIVATE_NETWORK)
     add_test(NAME ${T_NAME} COMMAND ${CMAKE_SOURCE_DIR}/tests/in_private_network.sh
-                                    $<TARGET_FILE:${T_NAME}>)
+                                    $<TARGET_FILE:${T_NAME}> ${T_ARGS})
   else()
-    add_test(NAME ${T_NAME} COMMAND ${T_NAME})
+    add_test(NAME ${T_NAME} COMMAND ${T_NAME} ${T_ARGS})
   endif()
   # Tests share the cores (ctest -j): solver threads sleep at once while they wait
   # (docs/performance.md, "How the threads wait"); tests that set their own ENVIRONMENT say

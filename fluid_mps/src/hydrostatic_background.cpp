@@ -90,6 +90,7 @@ class SurfaceHeights {
     std::vector<double> surface;
     std::vector<double> bottom;  // the lowest water of the layer (the bed under it, l0 / 2 up)
     std::vector<char> supported;
+    std::vector<char> below_top;  // 3D: the bin holds no particle of the top layer (surfaces())
   };
 
   // eta of each bin: the mean surface over the non-empty bins of its window (two bins either
@@ -109,7 +110,8 @@ class SurfaceHeights {
       for (int b0 = 0; b0 < bins_[0]; ++b0) {
         double sum = 0.0, lowest = -kEmpty, highest = kEmpty;
         double lowest_bed = -kEmpty, highest_bed = kEmpty;
-        int count = 0;
+        double sum_below = 0.0;  // the bins below the top layer, used only if all are
+        int count = 0, count_below = 0;
         bool held = true;  // every column within reach rests on a wall
         for (int k1 = -reach1; k1 <= reach1; ++k1) {
           for (int k0 = -reach; k0 <= reach; ++k0) {
@@ -122,12 +124,17 @@ class SurfaceHeights {
             lowest = std::min(lowest, h);
             highest = std::max(highest, h);
             if (std::abs(k0) > kSmoothingBins || std::abs(k1) > kSmoothingBins) continue;
+            if (columns.below_top[wrapped(b0 + k0, b1 + k1)]) {
+              sum_below += h;
+              ++count_below;
+              continue;
+            }
             sum += h;
             ++count;
           }
         }
-        if (count == 0) continue;
-        smoothed_[index(b0, b1)] = sum / count;
+        if (count + count_below == 0) continue;
+        smoothed_[index(b0, b1)] = count > 0 ? sum / count : sum_below / count_below;
         // A step in the bed within reach (a crest, the top of a partition, a brink's drop):
         // water flows over it, not hydrostatic either.
         trust_[index(b0, b1)] =
@@ -213,7 +220,7 @@ class SurfaceHeights {
     const double gap = kLayerGap * in_.particle_spacing;
     const int side1 = in_.dimension == 3 ? 1 : 0;
     Columns columns{std::vector<double>(bin_count, kEmpty), std::vector<double>(bin_count, kEmpty),
-                    std::vector<char>(bin_count, 0)};
+                    std::vector<char>(bin_count, 0), std::vector<char>(bin_count, 0)};
     std::vector<double>& bottom = columns.bottom;
     std::vector<double> band;
     for (int b1 = 0; b1 < bins_[1]; ++b1) {
@@ -234,6 +241,15 @@ class SurfaceHeights {
             own_first, heights.begin() + static_cast<std::ptrdiff_t>(start[b + 1]), *top);
         if (own_end == own_first) continue;  // all its water is above the layer
         columns.surface[b] = *(own_end - 1) + 0.5 * in_.particle_spacing;
+        // In 3D a bin of l0 x l0 holds on average about one particle of the top layer (0.79 on
+        // an fcc (001) face), so a bin without one reads the layer below, 0.8 l0 lower, in a
+        // pattern the mean over the window leaves 0.13 l0 of (slopes up to 0.08, each a
+        // sideways rho g slope on the water below): such a bin, more than half a spacing below
+        // the highest water of its band, is left out of the mean (smooth()). A surface steeper
+        // than about 1/4 across the band leaves its lower bins out as well and reads up to
+        // l0 / 2 high there. In 2D a bin of width l0 holds a particle of every layer.
+        columns.below_top[b] =
+            in_.dimension == 3 && *top - *(own_end - 1) > 0.5 * in_.particle_spacing;
         bottom[b] = band.front();
       }
     }

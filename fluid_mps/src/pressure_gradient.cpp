@@ -340,6 +340,42 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
   }
 }
 
+void add_full_pressure_repulsion(Form form, const GradientInput& in,
+                                 const std::vector<double>& dynamic_minimum,
+                                 const std::vector<double>& full_pressure,
+                                 const std::vector<char>* evaluate,
+                                 std::vector<Eigen::Vector3d>& gradient,
+                                 std::vector<Eigen::Vector3d>& wall) {
+  if (form == Form::symmetric || form == Form::symmetric_normal_wall) return;  // no p^_i
+  const auto& kinds = *in.kinds;
+  const auto& q = *in.pressure;
+  const int n = static_cast<int>(kinds.size());
+  GradientInput full = in;
+  full.pressure = &full_pressure;
+  std::vector<double> full_minimum;
+  neighbourhood_minimum(full, full_minimum, evaluate);
+  const double uncorrected = in.n0 / in.dimension;
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
+    const double extra =
+        (full_pressure[i] - full_minimum[i]) - (q[i] - dynamic_minimum[i]);  // [Pa]
+    if (extra == 0.0) continue;
+    const PairSums unit = pair_sums(in, i, [](int) { return 1.0; });
+    // The matrix the form applies to its repulsion part (corrected_split leaves it plain).
+    Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
+    if (form == Form::corrected ||
+        (form == Form::corrected_interior && full_neighbourhood(in, i))) {
+      m = uncorrected * correction_matrix(in, i);
+    } else if (form == Form::corrected_blended) {
+      const double w = correction_weight(in, i);
+      if (w > 0.0) m = (1.0 - w) * m + w * uncorrected * correction_matrix(in, i);
+    }
+    gradient[i] += extra * (m * unit.all);
+    wall[i] += extra * (m * unit.wall);
+  }
+}
+
 double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& velocities,
                        const std::vector<int>& pressure_unknown, const ShiftingOptions& options,
                        std::vector<Eigen::Vector3d>& positions_out) {

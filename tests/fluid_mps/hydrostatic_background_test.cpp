@@ -159,6 +159,39 @@ TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
   EXPECT_GT(checked, 100);
 }
 
+// A flat 3D layer whose top particle is missing from every third column along x and every
+// second along y (as bins of l0 x l0 miss the top layer of an fcc lattice, 0.79 particles to the
+// bin): those columns' own top lies a spacing lower, and are left out of the surface's mean, so
+// the surface stays flat and the background has no sideways gradient.
+TEST(MpsHydrostaticBackground, ThreeDimensionalColumnsBelowTheTopLayerLeaveTheSurfaceFlat) {
+  const double eta = 0.08;
+  Layer full = layer(3, 12, [&](double, double) { return eta; });
+  Layer l;
+  l.periodic = full.periodic;
+  for (std::size_t i = 0; i < full.positions.size(); ++i) {
+    const Eigen::Vector3d& x = full.positions[i];
+    const int c0 = static_cast<int>(x.x() / kL0), c1 = static_cast<int>(x.y() / kL0);
+    const bool top = std::abs(x.z() - eta) < 1e-9;
+    if (top && c0 % 3 == 1 && c1 % 2 == 0) continue;
+    l.positions.push_back(x);
+    l.kinds.push_back(full.kinds[i]);
+  }
+  ASSERT_LT(l.positions.size(), full.positions.size());
+  const auto [p, g, s] = background(l.input(3));
+  int checked = 0;
+  for (std::size_t i = 0; i < l.positions.size(); ++i) {
+    const Eigen::Vector3d& x = l.positions[i];
+    const bool interior =
+        x.x() > 3.0 * kL0 && x.x() < 9.0 * kL0 && x.y() > 3.0 * kL0 && x.y() < 9.0 * kL0;
+    if (l.kinds[i] != ParticleKind::fluid || !interior) continue;
+    EXPECT_NEAR(p[i], kRho * kG * (eta + kHalf - x.z()), 1e-6) << x.transpose();
+    EXPECT_NEAR(g[i].x(), 0.0, 1e-6) << x.transpose();
+    EXPECT_NEAR(g[i].y(), 0.0, 1e-6) << x.transpose();
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
 TEST(MpsHydrostaticBackground, NoBackgroundFarFromTheWater) {
   // Water over the first 10 columns only; the bed goes on for 20 more.
   Layer l = layer(2, 30, [](double, double) { return 0.05; });

@@ -370,21 +370,31 @@ TEST(MpsPeriodic, SymmetricGradientKeepsStillWaterHydrostatic) {
 }
 
 // Still water keeps its hydrostatic pressure with the hydrostatic background and shifting (the
-// rigid_canopy bundle's set, issue 16), and moves less than with the minimum form alone.
+// rigid_canopy bundle's set, issue 16), with q's repulsion and with the whole pressure's (the
+// bundle's). With q's it moves less than with the minimum form alone; with the whole pressure's
+// it moves about as much (measured 1.18 times here, 0.88 times in scenarios/still_water): in 2D
+// that repulsion is not needed to keep water at rest (in 3D it is: fill_lattice_settling_test).
 TEST(MpsPeriodic, HydrostaticBackgroundKeepsStillWaterHydrostatic) {
   MpsParameters plain = quiet_parameters(0.01);
   plain.radius_gradient_over_l0 = 4.0;
-  MpsParameters p = plain;
-  p.pressure_background = MpsParameters::PressureBackground::hydrostatic;
-  p.shifting_coefficient = 2.0;
-  const StillWaterSample sample = still_water_sample(p), reference = still_water_sample(plain);
-  const double expected = p.density * 9.81 * 0.15;
-  std::cout << "[still water, hydrostatic background] p at 0.15 m depth " << sample.pressure
-            << " Pa vs " << expected << " Pa (minimum form alone " << reference.pressure
-            << "), max speed " << sample.max_speed << " m/s, mean kinetic energy "
-            << sample.kinetic_energy << " J/kg (minimum form alone " << reference.kinetic_energy
-            << ")\n";
-  EXPECT_NEAR(sample.pressure, expected, 0.02 * expected);
-  EXPECT_LT(sample.max_speed, 0.2);
-  EXPECT_LT(sample.kinetic_energy, reference.kinetic_energy);
+  const StillWaterSample reference = still_water_sample(plain);
+  const double expected = plain.density * 9.81 * 0.15;
+  for (const auto repulsion :
+       {MpsParameters::BackgroundRepulsion::dynamic, MpsParameters::BackgroundRepulsion::full}) {
+    MpsParameters p = plain;
+    p.pressure_background = MpsParameters::PressureBackground::hydrostatic;
+    p.background_repulsion = repulsion;
+    p.shifting_coefficient = 2.0;
+    const StillWaterSample sample = still_water_sample(p);
+    std::cout << "[still water, hydrostatic background, repulsion " << static_cast<int>(repulsion)
+              << "] p at 0.15 m depth " << sample.pressure << " Pa vs " << expected
+              << " Pa (minimum form alone " << reference.pressure << "), max speed "
+              << sample.max_speed << " m/s, mean kinetic energy " << sample.kinetic_energy
+              << " J/kg (minimum form alone " << reference.kinetic_energy << ")\n";
+    EXPECT_NEAR(sample.pressure, expected, 0.02 * expected);
+    EXPECT_LT(sample.max_speed, 0.2);
+    if (repulsion == MpsParameters::BackgroundRepulsion::dynamic) {
+      EXPECT_LT(sample.kinetic_energy, reference.kinetic_energy);
+    }
+  }
 }

@@ -659,3 +659,85 @@ TEST(MpsPressureGradient, EvaluatingSomeParticlesGivesTheirSumsBitForBit) {
     EXPECT_GT(asked, 20);
   }
 }
+
+// background_repulsion: full (add_full_pressure_repulsion). On a regular column of water at rest
+// with its hydrostatic pressure, one deep particle moved 0.2 l0 sideways: the form on q alone
+// barely pushes it (q is the same constant all around it, so neither its Taylor part nor its
+// repulsion has anything to act on), the full pressure's repulsion pushes it back towards its
+// place. And everywhere the sums are the Taylor part on q plus the whole pressure's repulsion:
+// the whole pressure's minimum form less the form's own Taylor part on p_b.
+TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
+  const double l0 = 0.01, radius_over_l0 = 3.1, rho = 1000.0, g = 9.81;
+  const int columns = 21, rows = 24;
+  Block b = block(2, columns, rows, l0, 0.0, radius_over_l0 * l0, 1);
+  int moved = -1;
+  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
+    const Eigen::Vector3d& r = b.positions[i];
+    if (b.kinds[i] == ParticleKind::fluid && std::abs(r.x() - 10 * l0) < 1e-9 &&
+        std::abs(r.y() - 8 * l0) < 1e-9)
+      moved = static_cast<int>(i);
+  }
+  ASSERT_GE(moved, 0);
+  const double shift = 0.2 * l0;
+  b.positions[moved].x() += shift;
+  const double radius = radius_over_l0 * l0;
+  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius), radius);
+  grid.build(b.positions);
+  b.list = grid.neighbours(b.positions, radius);
+  const double surface = (rows - 0.5) * l0;
+  b.pressure.assign(b.kinds.size(), 0.0);
+  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
+    if (b.kinds[i] != ParticleKind::dummy) b.pressure[i] = rho * g * (surface - b.positions[i].y());
+  }
+  BackgroundInput background;
+  background.dimension = 2;
+  background.gravity = Eigen::Vector3d(0.0, -g, 0.0);
+  background.density = rho;
+  background.particle_spacing = l0;
+  background.taper_depth = radius;
+  background.positions = &b.positions;
+  background.kinds = &b.kinds;
+  background.periodic = &b.periodic;
+  BackgroundField field;
+  hydrostatic_background(background, field);
+  const std::vector<double> whole_pressure = b.pressure;
+  GradientInput in = b.input(2, radius_over_l0, l0);
+  std::vector<Eigen::Vector3d> whole, whole_wall;
+  std::vector<double> minimum;
+  pressure_gradients(Form::minimum, in, whole, whole_wall, minimum);
+  std::vector<double> q(b.kinds.size());
+  for (std::size_t i = 0; i < q.size(); ++i) q[i] = whole_pressure[i] - field.pressure[i];
+  in.pressure = &q;
+  std::vector<Eigen::Vector3d> dynamic, dynamic_wall;
+  pressure_gradients(Form::minimum, in, dynamic, dynamic_wall, minimum);
+  std::vector<Eigen::Vector3d> full = dynamic, full_wall = dynamic_wall;
+  add_full_pressure_repulsion(Form::minimum, in, minimum, whole_pressure, nullptr, full, full_wall);
+  // The force is -V d/n0 times the sum: a positive x sum pushes back towards -x.
+  const double factor = gradient_factor(2, in.n0);
+  const double back = factor * full[moved].x(), alone = factor * dynamic[moved].x();
+  std::cout << "[moved particle] sideways gradient, q's form " << alone
+            << " Pa/m, with the full repulsion " << back << " Pa/m (rho g = " << rho * g << ")\n";
+  EXPECT_GT(back, 0.05 * rho * g);
+  EXPECT_LT(std::abs(alone), 0.01 * back);
+  // The split, particle by particle: full = whole - sum (p_b,j - p_b,i) F_ij.
+  int checked = 0;
+  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
+    if (b.kinds[i] != ParticleKind::fluid) continue;
+    Eigen::Vector3d background_taylor = Eigen::Vector3d::Zero(),
+                    background_wall = Eigen::Vector3d::Zero();
+    for (int k = b.list.begin(static_cast<int>(i)); k < b.list.end(static_cast<int>(i)); ++k) {
+      const int j = b.list.index[k];
+      if (b.kinds[j] == ParticleKind::dummy || b.list.distance[k] >= in.radius) continue;
+      const Eigen::Vector3d term =
+          gradient_pair_term(field.pressure[j] - field.pressure[i], b.list.distance[k], in.radius,
+                             b.positions[j] - b.positions[i]);
+      background_taylor += term;
+      if (b.kinds[j] != ParticleKind::fluid) background_wall += term;
+    }
+    const double scale = whole[i].norm() + background_taylor.norm();
+    EXPECT_LT((full[i] - (whole[i] - background_taylor)).norm(), 1e-12 * scale) << i;
+    EXPECT_LT((full_wall[i] - (whole_wall[i] - background_wall)).norm(), 1e-12 * scale) << i;
+    ++checked;
+  }
+  EXPECT_EQ(checked, columns * rows);
+}

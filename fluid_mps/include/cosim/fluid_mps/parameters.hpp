@@ -185,6 +185,14 @@ struct MpsParameters {
   //               hydrostatic (steep surfaces, steps in the bed, water no wall holds up).
   enum class PressureBackground { none, hydrostatic };
   PressureBackground pressure_background = PressureBackground::none;
+  // With pressure_background: hydrostatic, the repulsion (x_i - x^_i) sum F of the forms with a
+  // neighbourhood minimum (add_full_pressure_repulsion in pressure_gradient.hpp):
+  //  dynamic: q's own (the form run on q alone); near zero in water at rest, so a lattice
+  //           kicked by its first settling is not held (a 3D still tank keeps stirring);
+  //  full:    the whole pressure's, of order rho g r_e, as without the background; the Taylor
+  //           part of the form stays on q.
+  enum class BackgroundRepulsion { dynamic, full };
+  BackgroundRepulsion background_repulsion = BackgroundRepulsion::dynamic;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
   // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
   double shifting_coefficient = 0.0;
@@ -235,6 +243,9 @@ inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
 inline constexpr scenario::Choices<MpsParameters::PressureBackground, 2> kPressureBackgrounds{
     {{"none", MpsParameters::PressureBackground::none},
      {"hydrostatic", MpsParameters::PressureBackground::hydrostatic}}};
+inline constexpr scenario::Choices<MpsParameters::BackgroundRepulsion, 2> kBackgroundRepulsions{
+    {{"dynamic", MpsParameters::BackgroundRepulsion::dynamic},
+     {"full", MpsParameters::BackgroundRepulsion::full}}};
 inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForms{
     {{"minimum", MpsParameters::GradientForm::minimum},
      {"symmetric", MpsParameters::GradientForm::symmetric},
@@ -319,6 +330,13 @@ void visit_parameters(P& p, V& v) {
         .doc("none, or hydrostatic: the gradient operator carries p - rho g (eta - h) of the "
              "local water column, whose exact gradient is added back"),
     p.pressure_background, kPressureBackgrounds);
+  v(Key("background_repulsion")
+        .only_with(p.pressure_background == MpsParameters::PressureBackground::hydrostatic,
+                   "pressure_background: hydrostatic")
+        .doc("with pressure_background: hydrostatic, the neighbourhood-minimum repulsion "
+             "(p_i - p^_i) sum F taken from q = p - p_b (dynamic) or from the whole pressure "
+             "(full: the stiffness that lets a resting lattice settle)"),
+    p.background_repulsion, kBackgroundRepulsions);
   v(Key("shifting_coefficient")
         .in(Range::between(0.0, 10.0))
         .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),

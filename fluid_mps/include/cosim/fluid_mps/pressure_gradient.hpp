@@ -49,6 +49,23 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
                         std::vector<Eigen::Vector3d>& gradient, std::vector<Eigen::Vector3d>& wall,
                         std::vector<double>& minimum, const std::vector<char>* evaluate = nullptr);
 
+// background_repulsion: full (issue 16). The forms with a neighbourhood minimum split as
+// sum_j (x_j - x_i) F_ij + (x_i - x^_i) sum_j F_ij (F_ij = r_ij w_ij / |r_ij|^2): a Taylor
+// difference and the repulsion that subtracting x^_i adds (Koshizuka & Oka 1996). Run on
+// q = p - p_b (in.pressure) the repulsion is q's, near zero in water at rest; on the whole
+// pressure it is of order rho g r_e, and it pushes a particle moved off its place back towards
+// the middle of its neighbours: the stiffness that lets a resting lattice settle. This adds
+// ((p_i - p^_i) - (q_i - q^_i)) M_i sum_j F_ij to the sums `pressure_gradients` gave on q
+// (`dynamic_minimum` its q^_i, M_i the matrix the form applies there), and the walls' share to
+// `wall`, at the fluid particles `evaluate` marks; the Taylor part stays on q. Nothing for the
+// symmetric forms, which have no minimum.
+void add_full_pressure_repulsion(MpsParameters::GradientForm form, const GradientInput& in,
+                                 const std::vector<double>& dynamic_minimum,
+                                 const std::vector<double>& full_pressure,
+                                 const std::vector<char>* evaluate,
+                                 std::vector<Eigen::Vector3d>& gradient,
+                                 std::vector<Eigen::Vector3d>& wall);
+
 // The correction matrix of Khayyer & Gotoh (2011), Appl. Ocean Res. 33: C_i = [sum_j w_ij
 // r_ij (x) r_ij / |r_ij|^2]^-1 over the non-dummy neighbours (the D x D block; the rest of the
 // 3 x 3 matrix is zero in 2D). It is d/n0 times the identity on a full lattice. Where the
