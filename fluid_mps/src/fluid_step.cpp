@@ -433,8 +433,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
     pressure_gradients(p.gradient_form, in, pressure_change_, wall_pressure_change_, minimum_,
                        &trusted_);
     if (p.background_repulsion == MpsParameters::BackgroundRepulsion::full) {
-      add_full_pressure_repulsion(p.gradient_form, in, minimum_, pressure_, &trusted_,
-                                  pressure_change_, wall_pressure_change_);
+      add_full_pressure_repulsion(p.gradient_form, in, minimum_, pressure_, background_.fade,
+                                  &trusted_, pressure_change_, wall_pressure_change_);
     }
     in.pressure = &pressure_;
     pressure_gradients(p.gradient_form, in, untrusted_change_, untrusted_wall_change_, minimum_,

@@ -60,10 +60,11 @@ class SurfaceHeights {
 
   // p_b and its gradient at x, and the trust S of its column apart (see the header).
   void background(const Eigen::Vector3d& x, double& pressure, Eigen::Vector3d& gradient,
-                  double& trust) const {
+                  double& trust, double& fade) const {
     pressure = 0.0;
     gradient.setZero();
     trust = 0.0;
+    fade = 0.0;
     double eta = 0.0, column_trust = 0.0;
     std::array<double, 2> eta_slope{0.0, 0.0}, unused{0.0, 0.0};
     if (!interpolate(smoothed_, true, x, eta, eta_slope)) return;
@@ -78,6 +79,7 @@ class SurfaceHeights {
     const double f = depth < delta ? 0.5 * depth * depth / delta : depth - 0.5 * delta;
     const double df = depth < delta ? depth / delta : 1.0;
     pressure = rho_g * f;
+    fade = df;
     for (int a = 0; a < in_.dimension - 1; ++a) gradient[axis_[a]] = rho_g * (df * eta_slope[a]);
     gradient[up_] = -rho_g * df * sign_;
   }
@@ -395,12 +397,14 @@ void hydrostatic_background(const BackgroundInput& in, BackgroundField& out) {
   out.pressure.assign(n, 0.0);
   out.gradient.assign(n, Eigen::Vector3d::Zero());
   out.trust.assign(n, 0.0);
+  out.fade.assign(n, 0.0);
   if (n == 0 || in.gravity.squaredNorm() == 0.0) return;
   const SurfaceHeights surface(in);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (carries_pressure(kinds[i]))
-      surface.background((*in.positions)[i], out.pressure[i], out.gradient[i], out.trust[i]);
+      surface.background((*in.positions)[i], out.pressure[i], out.gradient[i], out.trust[i],
+                         out.fade[i]);
   }
 }
 

@@ -343,7 +343,7 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
 void add_full_pressure_repulsion(Form form, const GradientInput& in,
                                  const std::vector<double>& dynamic_minimum,
                                  const std::vector<double>& full_pressure,
-                                 const std::vector<char>* evaluate,
+                                 const std::vector<double>& fade, const std::vector<char>* evaluate,
                                  std::vector<Eigen::Vector3d>& gradient,
                                  std::vector<Eigen::Vector3d>& wall) {
   if (form == Form::symmetric || form == Form::symmetric_normal_wall) return;  // no p^_i
@@ -359,7 +359,7 @@ void add_full_pressure_repulsion(Form form, const GradientInput& in,
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
     const double extra =
-        (full_pressure[i] - full_minimum[i]) - (q[i] - dynamic_minimum[i]);  // [Pa]
+        fade[i] * ((full_pressure[i] - full_minimum[i]) - (q[i] - dynamic_minimum[i]));  // [Pa]
     if (extra == 0.0) continue;
     const PairSums unit = pair_sums(in, i, [](int) { return 1.0; });
     // The matrix the form applies to its repulsion part (corrected_split leaves it plain).

@@ -82,7 +82,7 @@ BackgroundField background(const BackgroundInput& in) {
 
 TEST(MpsHydrostaticBackground, FlatLayerIsHydrostaticBelowTheTopParticles) {
   const Layer l = layer(2, 20, [](double, double) { return 0.1; });
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] == ParticleKind::dummy) {
       EXPECT_EQ(p[i], 0.0);
@@ -103,7 +103,7 @@ TEST(MpsHydrostaticBackground, SlopingSurfaceGivesItsSlopeInTheInterior) {
   const double slope = 0.05;
   auto eta = [&](double x, double) { return 0.1 - slope * x; };
   const Layer l = layer(2, 30, eta);
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   int checked = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     const Eigen::Vector3d& x = l.positions[i];
@@ -126,7 +126,7 @@ TEST(MpsHydrostaticBackground, PeriodicSeamKeepsTheSlopeOfADroppingChannel) {
   l.periodic.x_min = 0.0;
   l.periodic.x_max = length;
   l.periodic.drop = drop;
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
     // Everywhere, the seam included: the bins wrap with the drop.
@@ -143,7 +143,7 @@ TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
   const double sx = 0.03, sy = -0.02;
   auto eta = [&](double x, double y) { return 0.08 + sx * x + sy * y; };
   const Layer l = layer(3, 12, eta);
-  const auto [p, g, s] = background(l.input(3));
+  const auto [p, g, s, fade] = background(l.input(3));
   int checked = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     const Eigen::Vector3d& x = l.positions[i];
@@ -177,7 +177,7 @@ TEST(MpsHydrostaticBackground, ThreeDimensionalColumnsBelowTheTopLayerLeaveTheSu
     l.kinds.push_back(full.kinds[i]);
   }
   ASSERT_LT(l.positions.size(), full.positions.size());
-  const auto [p, g, s] = background(l.input(3));
+  const auto [p, g, s, fade] = background(l.input(3));
   int checked = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     const Eigen::Vector3d& x = l.positions[i];
@@ -199,7 +199,7 @@ TEST(MpsHydrostaticBackground, NoBackgroundFarFromTheWater) {
     if (l.kinds[i] == ParticleKind::fluid && l.positions[i].x() > 10.0 * kL0)
       l.kinds[i] = ParticleKind::inactive;
   }
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::wall) continue;
     const double x = l.positions[i].x();
@@ -219,7 +219,7 @@ TEST(MpsHydrostaticBackground, FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces
   const Layer l = layer(2, 40, [](double x, double) { return x < 0.15 ? 0.2 : 0.03; });
   BackgroundInput in = l.input(2);
   in.taper_depth = delta;
-  const auto [p, g, s] = background(in);
+  const auto [p, g, s, fade] = background(in);
   int deep_block = 0, near_step = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
@@ -257,7 +257,7 @@ TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
       l.kinds.push_back(ParticleKind::fluid);
     }
   }
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   int pool_checked = 0, jet_checked = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
@@ -283,7 +283,7 @@ TEST(MpsHydrostaticBackground, NoBackgroundNearWaterThatNoWallHoldsUp) {
     if (l.kinds[i] != ParticleKind::fluid && l.positions[i].x() > 0.4)
       l.kinds[i] = ParticleKind::inactive;
   }
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   int upstream = 0, past = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     if (l.kinds[i] != ParticleKind::fluid) continue;
@@ -317,7 +317,7 @@ TEST(MpsHydrostaticBackground, NoTrustNearAStepInTheBed) {
   }
   BackgroundInput in = l.input(2);
   in.taper_depth = delta;
-  const auto [p, g, s] = background(in);
+  const auto [p, g, s, fade] = background(in);
   // The raised side's first bin (40) is the feature: bins 23 to 57 have S = 0.
   int far = 0, near = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
@@ -345,7 +345,7 @@ TEST(MpsHydrostaticBackground, AGapInOneBinWithWaterBesideItIsNotAir) {
         x.y() < 0.075)
       l.kinds[i] = ParticleKind::inactive;  // column 10: no particle from 0.03 to 0.07 m
   }
-  const auto [p, g, s] = background(l.input(2));
+  const auto [p, g, s, fade] = background(l.input(2));
   int below_gap = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
     const Eigen::Vector3d& x = l.positions[i];

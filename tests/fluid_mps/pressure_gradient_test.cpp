@@ -664,8 +664,9 @@ TEST(MpsPressureGradient, EvaluatingSomeParticlesGivesTheirSumsBitForBit) {
 // with its hydrostatic pressure, one deep particle moved 0.2 l0 sideways: the form on q alone
 // barely pushes it (q is the same constant all around it, so neither its Taylor part nor its
 // repulsion has anything to act on), the full pressure's repulsion pushes it back towards its
-// place. And everywhere the sums are the Taylor part on q plus the whole pressure's repulsion:
-// the whole pressure's minimum form less the form's own Taylor part on p_b.
+// place. And everywhere the sums are the Taylor part on q plus the whole pressure's repulsion
+// (faded in with the background): the whole pressure's minimum form less the form's own Taylor
+// part on p_b, below the fade-in layer.
 TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
   const double l0 = 0.01, radius_over_l0 = 3.1, rho = 1000.0, g = 9.81;
   const int columns = 21, rows = 24;
@@ -711,7 +712,8 @@ TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
   std::vector<Eigen::Vector3d> dynamic, dynamic_wall;
   pressure_gradients(Form::minimum, in, dynamic, dynamic_wall, minimum);
   std::vector<Eigen::Vector3d> full = dynamic, full_wall = dynamic_wall;
-  add_full_pressure_repulsion(Form::minimum, in, minimum, whole_pressure, nullptr, full, full_wall);
+  add_full_pressure_repulsion(Form::minimum, in, minimum, whole_pressure, field.fade, nullptr, full,
+                              full_wall);
   // The force is -V d/n0 times the sum: a positive x sum pushes back towards -x.
   const double factor = gradient_factor(2, in.n0);
   const double back = factor * full[moved].x(), alone = factor * dynamic[moved].x();
@@ -719,8 +721,9 @@ TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
             << " Pa/m, with the full repulsion " << back << " Pa/m (rho g = " << rho * g << ")\n";
   EXPECT_GT(back, 0.05 * rho * g);
   EXPECT_LT(std::abs(alone), 0.01 * back);
-  // The split, particle by particle: full = whole - sum (p_b,j - p_b,i) F_ij.
-  int checked = 0;
+  // The split, particle by particle: below the fade-in layer (f' = 1) full = whole - sum
+  // (p_b,j - p_b,i) F_ij; within it the added repulsion is f' times that one.
+  int checked = 0, faded = 0;
   for (std::size_t i = 0; i < b.kinds.size(); ++i) {
     if (b.kinds[i] != ParticleKind::fluid) continue;
     Eigen::Vector3d background_taylor = Eigen::Vector3d::Zero(),
@@ -735,9 +738,15 @@ TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
       if (b.kinds[j] != ParticleKind::fluid) background_wall += term;
     }
     const double scale = whole[i].norm() + background_taylor.norm();
-    EXPECT_LT((full[i] - (whole[i] - background_taylor)).norm(), 1e-12 * scale) << i;
-    EXPECT_LT((full_wall[i] - (whole_wall[i] - background_wall)).norm(), 1e-12 * scale) << i;
+    const double f = field.fade[i];
+    const Eigen::Vector3d expected = dynamic[i] + f * (whole[i] - background_taylor - dynamic[i]);
+    const Eigen::Vector3d expected_wall =
+        dynamic_wall[i] + f * (whole_wall[i] - background_wall - dynamic_wall[i]);
+    EXPECT_LT((full[i] - expected).norm(), 1e-12 * scale) << i;
+    EXPECT_LT((full_wall[i] - expected_wall).norm(), 1e-12 * scale) << i;
     ++checked;
+    faded += f < 1.0;
   }
   EXPECT_EQ(checked, columns * rows);
+  EXPECT_GT(faded, columns);  // the top layers are within the fade-in
 }

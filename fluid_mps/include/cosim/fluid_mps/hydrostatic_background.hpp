@@ -57,6 +57,7 @@ struct BackgroundField {
   std::vector<double> pressure;           // p_b [Pa]
   std::vector<Eigen::Vector3d> gradient;  // grad p_b [Pa/m]
   std::vector<double> trust;              // S [-]
+  std::vector<double> fade;               // f' = min(d / delta, 1), 0 without a column [-]
 };
 
 void hydrostatic_background(const BackgroundInput& in, BackgroundField& out);

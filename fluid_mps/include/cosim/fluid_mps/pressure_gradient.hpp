@@ -55,14 +55,18 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
 // q = p - p_b (in.pressure) the repulsion is q's, near zero in water at rest; on the whole
 // pressure it is of order rho g r_e, and it pushes a particle moved off its place back towards
 // the middle of its neighbours: the stiffness that lets a resting lattice settle. This adds
-// ((p_i - p^_i) - (q_i - q^_i)) M_i sum_j F_ij to the sums `pressure_gradients` gave on q
-// (`dynamic_minimum` its q^_i, M_i the matrix the form applies there), and the walls' share to
-// `wall`, at the fluid particles `evaluate` marks; the Taylor part stays on q. Nothing for the
-// symmetric forms, which have no minimum.
+// f'_i ((p_i - p^_i) - (q_i - q^_i)) M_i sum_j F_ij to the sums `pressure_gradients` gave on q
+// (`dynamic_minimum` its q^_i, M_i the matrix the form applies there, f'_i = `fade`, the
+// background's own fade-in below the surface, BackgroundField), and the walls' share to `wall`,
+// at the fluid particles `evaluate` marks; the Taylor part stays on q. The fade keeps the
+// repulsion where the exact grad p_b already carries the weight and the neighbourhood is one-
+// sided (near the surface sum F points down: the repulsion would lift the top layer a second
+// time; still water at l0 = 1 cm reads +2.4 % at 0.05 m without the fade, +1.2 % with it).
+// Nothing for the symmetric forms, which have no minimum.
 void add_full_pressure_repulsion(MpsParameters::GradientForm form, const GradientInput& in,
                                  const std::vector<double>& dynamic_minimum,
                                  const std::vector<double>& full_pressure,
-                                 const std::vector<char>* evaluate,
+                                 const std::vector<double>& fade, const std::vector<char>* evaluate,
                                  std::vector<Eigen::Vector3d>& gradient,
                                  std::vector<Eigen::Vector3d>& wall);
 
