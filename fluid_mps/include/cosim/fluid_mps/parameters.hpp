@@ -189,8 +189,9 @@ struct MpsParameters {
   // neighbourhood minimum (add_full_pressure_repulsion in pressure_gradient.hpp):
   //  dynamic: q's own (the form run on q alone); near zero in water at rest, so a lattice
   //           kicked by its first settling is not held (a 3D still tank keeps stirring);
-  //  full:    the whole pressure's, of order rho g r_e, as without the background; the Taylor
-  //           part of the form stays on q.
+  //  full:    the whole pressure's, of order rho g r_e, as without the background, faded in
+  //           with the background below the surface; the Taylor part of the form stays on q
+  //           (docs/validation.md, rigid_canopy, eighth round).
   enum class BackgroundRepulsion { dynamic, full };
   BackgroundRepulsion background_repulsion = BackgroundRepulsion::dynamic;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
@@ -335,7 +336,8 @@ void visit_parameters(P& p, V& v) {
                    "pressure_background: hydrostatic")
         .doc("with pressure_background: hydrostatic, the neighbourhood-minimum repulsion "
              "(p_i - p^_i) sum F taken from q = p - p_b (dynamic) or from the whole pressure "
-             "(full: the stiffness that lets a resting lattice settle)"),
+             "(full, faded in with the background: the stiffness that lets a resting lattice "
+             "settle)"),
     p.background_repulsion, kBackgroundRepulsions);
   v(Key("shifting_coefficient")
         .in(Range::between(0.0, 10.0))
