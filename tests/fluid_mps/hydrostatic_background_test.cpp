@@ -139,10 +139,11 @@ TEST(MpsHydrostaticBackground, PeriodicSeamKeepsTheSlopeOfADroppingChannel) {
   }
 }
 
-TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
-  const double sx = 0.03, sy = -0.02;
-  auto eta = [&](double x, double y) { return 0.08 + sx * x + sy * y; };
-  const Layer l = layer(3, 12, eta);
+namespace {
+
+// The background of every fluid particle of a 3D layer 12 columns wide, three columns or more
+// from its sides: that of the plane eta = eta0 + sx x + sy y.
+void expect_plane(const Layer& l, double eta0, double sx, double sy) {
   const auto [p, g, s, fade] = background(l.input(3));
   int checked = 0;
   for (std::size_t i = 0; i < l.positions.size(); ++i) {
@@ -150,13 +151,22 @@ TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
     const bool interior =
         x.x() > 3.0 * kL0 && x.x() < 9.0 * kL0 && x.y() > 3.0 * kL0 && x.y() < 9.0 * kL0;
     if (l.kinds[i] != ParticleKind::fluid || !interior) continue;
-    EXPECT_NEAR(p[i], kRho * kG * (eta(x.x(), x.y()) + kHalf - x.z()), 1e-6);
-    EXPECT_NEAR(g[i].x(), kRho * kG * sx, 1e-6);
-    EXPECT_NEAR(g[i].y(), kRho * kG * sy, 1e-6);
-    EXPECT_NEAR(g[i].z(), -kRho * kG, 1e-9);
+    const double eta = eta0 + sx * x.x() + sy * x.y();
+    EXPECT_NEAR(p[i], kRho * kG * (eta + kHalf - x.z()), 1e-6) << x.transpose();
+    EXPECT_NEAR(g[i].x(), kRho * kG * sx, 1e-6) << x.transpose();
+    EXPECT_NEAR(g[i].y(), kRho * kG * sy, 1e-6) << x.transpose();
+    EXPECT_NEAR(g[i].z(), -kRho * kG, 1e-9) << x.transpose();
     ++checked;
   }
   EXPECT_GT(checked, 100);
+}
+
+}  // namespace
+
+TEST(MpsHydrostaticBackground, ThreeDimensionalPlane) {
+  const double sx = 0.03, sy = -0.02;
+  expect_plane(layer(3, 12, [&](double x, double y) { return 0.08 + sx * x + sy * y; }), 0.08, sx,
+               sy);
 }
 
 // A flat 3D layer whose top particle is missing from every third column along x and every
@@ -177,19 +187,7 @@ TEST(MpsHydrostaticBackground, ThreeDimensionalColumnsBelowTheTopLayerLeaveTheSu
     l.kinds.push_back(full.kinds[i]);
   }
   ASSERT_LT(l.positions.size(), full.positions.size());
-  const auto [p, g, s, fade] = background(l.input(3));
-  int checked = 0;
-  for (std::size_t i = 0; i < l.positions.size(); ++i) {
-    const Eigen::Vector3d& x = l.positions[i];
-    const bool interior =
-        x.x() > 3.0 * kL0 && x.x() < 9.0 * kL0 && x.y() > 3.0 * kL0 && x.y() < 9.0 * kL0;
-    if (l.kinds[i] != ParticleKind::fluid || !interior) continue;
-    EXPECT_NEAR(p[i], kRho * kG * (eta + kHalf - x.z()), 1e-6) << x.transpose();
-    EXPECT_NEAR(g[i].x(), 0.0, 1e-6) << x.transpose();
-    EXPECT_NEAR(g[i].y(), 0.0, 1e-6) << x.transpose();
-    ++checked;
-  }
-  EXPECT_GT(checked, 100);
+  expect_plane(l, eta, 0.0, 0.0);
 }
 
 TEST(MpsHydrostaticBackground, NoBackgroundFarFromTheWater) {
