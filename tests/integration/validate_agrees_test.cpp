@@ -102,6 +102,23 @@ TEST(ValidateAgrees, SurfaceThresholdOfOneIsRefusedByValidate) {
             "surface_threshold: value 1 is out of range [0.5, 1)");
 }
 
+// background_repulsion means something only with the hydrostatic background and a gradient form
+// that has a neighbourhood minimum: elsewhere it would be silently ignored, so it is refused at
+// its line.
+TEST(ValidateAgrees, BackgroundRepulsionWithoutItsBackgroundOrMinimumIsRefused) {
+  const std::string with = "    particle_spacing: 0.01\n    background_repulsion: full\n";
+  expect_refused(replace(kFluid, "    particle_spacing: 0.01\n", with),
+                 "scenario.yaml:8: key 'participants.fluid_mps.background_repulsion'",
+                 "only used with pressure_background: hydrostatic");
+  const std::string background = "    pressure_background: hydrostatic\n";
+  expect_refused(replace(kFluid, "    particle_spacing: 0.01\n",
+                         with + background + "    pressure_gradient: symmetric\n"),
+                 "scenario.yaml:8: key 'participants.fluid_mps.background_repulsion'",
+                 "not the symmetric forms");
+  const std::string accepted = replace(kFluid, "    particle_spacing: 0.01\n", with + background);
+  EXPECT_EQ(validate(accepted).exit_code, 0) << validate(accepted).output;
+}
+
 // A restitution no damping ratio reaches: the DEM's bisection gave up at the process start.
 TEST(ValidateAgrees, UnreachableRestitutionIsRefusedByValidate) {
   expect_refused(std::string(kDebris) + "    materials:\n      debris: {restitution: 1.0e-20}\n",

@@ -332,8 +332,11 @@ void visit_parameters(P& p, V& v) {
              "local water column, whose exact gradient is added back"),
     p.pressure_background, kPressureBackgrounds);
   v(Key("background_repulsion")
-        .only_with(p.pressure_background == MpsParameters::PressureBackground::hydrostatic,
-                   "pressure_background: hydrostatic")
+        .only_with(p.pressure_background == MpsParameters::PressureBackground::hydrostatic &&
+                       p.gradient_form != MpsParameters::GradientForm::symmetric &&
+                       p.gradient_form != MpsParameters::GradientForm::symmetric_normal_wall,
+                   "pressure_background: hydrostatic and a pressure_gradient with a neighbourhood "
+                   "minimum (not the symmetric forms)")
         .doc("with pressure_background: hydrostatic, the neighbourhood-minimum repulsion "
              "(p_i - p^_i) sum F taken from q = p - p_b (dynamic) or from the whole pressure "
              "(full, faded in with the background: the stiffness that lets a resting lattice "
