@@ -434,7 +434,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
                        &trusted_);
     if (p.background_repulsion == MpsParameters::BackgroundRepulsion::full) {
       add_full_pressure_repulsion(p.gradient_form, in, minimum_, pressure_, background_.fade,
-                                  &trusted_, pressure_change_, wall_pressure_change_);
+                                  &trusted_, pressure_change_, wall_pressure_change_,
+                                  full_minimum_);
     }
     in.pressure = &pressure_;
     pressure_gradients(p.gradient_form, in, untrusted_change_, untrusted_wall_change_, minimum_,

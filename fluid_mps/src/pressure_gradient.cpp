@@ -345,14 +345,14 @@ void add_full_pressure_repulsion(Form form, const GradientInput& in,
                                  const std::vector<double>& full_pressure,
                                  const std::vector<double>& fade, const std::vector<char>* evaluate,
                                  std::vector<Eigen::Vector3d>& gradient,
-                                 std::vector<Eigen::Vector3d>& wall) {
+                                 std::vector<Eigen::Vector3d>& wall,
+                                 std::vector<double>& full_minimum) {
   if (form == Form::symmetric || form == Form::symmetric_normal_wall) return;  // no p^_i
   const auto& kinds = *in.kinds;
   const auto& q = *in.pressure;
   const int n = static_cast<int>(kinds.size());
   GradientInput full = in;
   full.pressure = &full_pressure;
-  std::vector<double> full_minimum;
   neighbourhood_minimum(full, full_minimum, evaluate);
   const double uncorrected = in.n0 / in.dimension;
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)

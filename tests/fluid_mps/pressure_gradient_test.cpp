@@ -712,8 +712,9 @@ TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
   std::vector<Eigen::Vector3d> dynamic, dynamic_wall;
   pressure_gradients(Form::minimum, in, dynamic, dynamic_wall, minimum);
   std::vector<Eigen::Vector3d> full = dynamic, full_wall = dynamic_wall;
+  std::vector<double> full_minimum;
   add_full_pressure_repulsion(Form::minimum, in, minimum, whole_pressure, field.fade, nullptr, full,
-                              full_wall);
+                              full_wall, full_minimum);
   // The force is -V d/n0 times the sum: a positive x sum pushes back towards -x.
   const double factor = gradient_factor(2, in.n0);
   const double back = factor * full[moved].x(), alone = factor * dynamic[moved].x();

@@ -253,7 +253,7 @@ class FluidSystem {
       wall_correction_, pressure_change_, wall_pressure_change_, untrusted_change_,
       untrusted_wall_change_;
   std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_,
-      dynamic_pressure_;
+      full_minimum_, dynamic_pressure_;
   BackgroundField background_;
   std::vector<char> trusted_, untrusted_;  // S > 0, S < 1: where each estimate is needed
   std::vector<int> collided_, unknown_, unknown_particle_;

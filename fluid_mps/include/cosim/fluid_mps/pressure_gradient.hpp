@@ -62,13 +62,15 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
 // repulsion where the exact grad p_b already carries the weight and the neighbourhood is one-
 // sided (near the surface sum F points down: the repulsion would lift the top layer a second
 // time; still water at l0 = 1 cm reads +2.4 % at 0.05 m without the fade, +1.2 % with it).
-// Nothing for the symmetric forms, which have no minimum.
+// Nothing for the symmetric forms, which have no minimum. `full_minimum` is the work array of
+// p^_i, as `minimum` of pressure_gradients.
 void add_full_pressure_repulsion(MpsParameters::GradientForm form, const GradientInput& in,
                                  const std::vector<double>& dynamic_minimum,
                                  const std::vector<double>& full_pressure,
                                  const std::vector<double>& fade, const std::vector<char>* evaluate,
                                  std::vector<Eigen::Vector3d>& gradient,
-                                 std::vector<Eigen::Vector3d>& wall);
+                                 std::vector<Eigen::Vector3d>& wall,
+                                 std::vector<double>& full_minimum);
 
 // The correction matrix of Khayyer & Gotoh (2011), Appl. Ocean Res. 33: C_i = [sum_j w_ij
 // r_ij (x) r_ij / |r_ij|^2]^-1 over the non-dummy neighbours (the D x D block; the rest of the
