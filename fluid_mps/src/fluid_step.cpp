@@ -388,6 +388,8 @@ void FluidSystem::measure_background() {
   b.density = p.density;
   b.particle_spacing = p.particle_spacing;
   b.taper_depth = p.radius_gradient_over_l0 * p.particle_spacing;
+  b.fade_depth = p.background_fade_depth_over_re * b.taper_depth;
+  b.blend_fade = p.background_fade == MpsParameters::BackgroundFade::blend;
   b.positions = &position_star_;
   b.kinds = &kind_;
   b.periodic = &p.periodic;

@@ -72,10 +72,20 @@ class SurfaceHeights {
     const double depth = eta - height(x);
     if (depth <= 0.0) return;
     trust = std::max(column_trust, 0.0);
+    const double delta = in_.fade_depth > 0.0 ? in_.fade_depth : in_.taper_depth;
+    const double rho_g = in_.density * g_up_;
+    if (in_.blend_fade) {
+      // Linear p_b, and the fade on the weight of the background's estimate: every field the
+      // operator sees stays linear in water at rest (a curved q in the layer stirs it).
+      pressure = rho_g * depth;
+      fade = 1.0;
+      if (delta > 0.0) trust *= std::min(depth / delta, 1.0);
+      for (int a = 0; a < in_.dimension - 1; ++a) gradient[axis_[a]] = rho_g * eta_slope[a];
+      gradient[up_] = -rho_g * sign_;
+      return;
+    }
     // Tapered over the surface layer: f(d) = d^2 / (2 delta) below delta, d - delta / 2 deeper
     // (continuous with its slope f' = min(d / delta, 1)).
-    const double delta = in_.taper_depth;
-    const double rho_g = in_.density * g_up_;
     const double f = depth < delta ? 0.5 * depth * depth / delta : depth - 0.5 * delta;
     const double df = depth < delta ? depth / delta : 1.0;
     pressure = rho_g * f;

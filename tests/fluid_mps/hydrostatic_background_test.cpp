@@ -244,6 +244,41 @@ TEST(MpsHydrostaticBackground, FadesInBelowTheSurfaceAndTrustsOnlyGentleSurfaces
   EXPECT_GT(near_step, 40);
 }
 
+// background_fade: blend keeps p_b linear (the operator sees no curved field in the surface
+// layer) and moves the fade onto the trust: S min(d / delta, 1), the full repulsion's fade 1; the
+// trust's reach stays that of the operator (taper_depth) when the fade depth differs.
+TEST(MpsHydrostaticBackground, BlendFadeKeepsTheBackgroundLinearAndFadesTheTrust) {
+  const double delta = 0.04, top = 0.2 + kHalf;
+  const Layer l = layer(2, 40, [](double x, double) { return x < 0.15 ? 0.2 : 0.03; });
+  for (const double fade_depth : {0.0, 2.0 * delta}) {
+    BackgroundInput in = l.input(2);
+    in.taper_depth = delta;
+    in.fade_depth = fade_depth;
+    in.blend_fade = true;
+    const double depth_of_fade = fade_depth > 0.0 ? fade_depth : delta;
+    const auto [p, g, s, fade] = background(in);
+    int checked = 0, faded = 0;
+    for (std::size_t i = 0; i < l.positions.size(); ++i) {
+      if (l.kinds[i] != ParticleKind::fluid) continue;
+      const Eigen::Vector3d& x = l.positions[i];
+      if (x.x() < 0.08) {  // the gentle part, as in the taper's test: the column's S is 1
+        const double d = top - x.y();
+        EXPECT_NEAR(p[i], kRho * kG * d, 1e-6) << x.transpose();
+        EXPECT_NEAR(g[i].y(), -kRho * kG, 1e-6);
+        EXPECT_NEAR(g[i].x(), 0.0, 1e-6);
+        EXPECT_NEAR(s[i], std::min(d / depth_of_fade, 1.0), 1e-12) << x.transpose();
+        EXPECT_EQ(fade[i], 1.0);
+        faded += d < depth_of_fade;
+        ++checked;
+      } else if (x.x() > 0.10 && x.x() < 0.20) {
+        EXPECT_EQ(s[i], 0.0) << x.transpose();  // the step is still seen over the operator's reach
+      }
+    }
+    EXPECT_GT(checked, 100);
+    EXPECT_GE(faded, fade_depth > 0.0 ? 7 * 8 : 3 * 8) << "rows of 8 columns inside the fade";
+  }
+}
+
 TEST(MpsHydrostaticBackground, WaterAboveAnAirGapIsNotPartOfTheColumn) {
   // A pool 5 cm deep, and a jet 3 cm thick flying 5 cm above it over columns 8-15 (a nappe over
   // the pool it falls into): the pool's background is that of its own surface, the jet has none.

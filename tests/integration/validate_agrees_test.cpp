@@ -119,6 +119,24 @@ TEST(ValidateAgrees, BackgroundRepulsionWithoutItsBackgroundOrMinimumIsRefused) 
   EXPECT_EQ(validate(accepted).exit_code, 0) << validate(accepted).output;
 }
 
+// The background's fade and its depth: only with the background, and a depth of zero (a fade
+// over nothing) is out of range, at its line.
+TEST(ValidateAgrees, BackgroundFadeWithoutItsBackgroundOrOfNoDepthIsRefused) {
+  const std::string blend = "    particle_spacing: 0.01\n    background_fade: blend\n";
+  expect_refused(replace(kFluid, "    particle_spacing: 0.01\n", blend),
+                 "scenario.yaml:8: key 'participants.fluid_mps.background_fade'",
+                 "only used with pressure_background: hydrostatic");
+  const std::string background = "    pressure_background: hydrostatic\n";
+  expect_refused(replace(kFluid, "    particle_spacing: 0.01\n",
+                         blend + background + "    background_fade_depth_over_re: 0\n"),
+                 "scenario.yaml:10: key 'participants.fluid_mps.background_fade_depth_over_re'",
+                 "value 0 is out of range (0, 4]");
+  const std::string accepted =
+      replace(kFluid, "    particle_spacing: 0.01\n",
+              blend + background + "    background_fade_depth_over_re: 2\n");
+  EXPECT_EQ(validate(accepted).exit_code, 0) << validate(accepted).output;
+}
+
 // A restitution no damping ratio reaches: the DEM's bisection gave up at the process start.
 TEST(ValidateAgrees, UnreachableRestitutionIsRefusedByValidate) {
   expect_refused(std::string(kDebris) + "    materials:\n      debris: {restitution: 1.0e-20}\n",

@@ -16,7 +16,8 @@
 // bins either way and interpolated (bi)linearly between bin centres. f fades the background in
 // over the depth delta below the surface (f = d^2 / (2 delta) above delta, d - delta / 2 below,
 // so f' = min(d / delta, 1)): in that layer the operator still carries the particles' weight, as
-// without a background. S is the trust in the column, 0 to 1, interpolated as eta: within reach
+// without a background. With blend_fade, f = d (p_b linear) and S is scaled by min(d / delta, 1)
+// instead: the same handover, but the operator never sees the taper's curvature. S is the trust in the column, 0 to 1, interpolated as eta: within reach
 // of the operator from the smoothing window (2 + delta / l0 bins either way) the surface heights
 // and the bed heights (the lowest water of each column) must each span at most delta for 1, and
 // S is 0 from 2 delta on (a steep face, a surge front, a brink, a nappe, a crest or the top of a
@@ -47,6 +48,10 @@ struct BackgroundInput {
   double particle_spacing = 0.0;                      // l0 [m]: the column bin width
   // delta [m]; 0: no fade-in, S = 1 (the step passes r_e of the gradient)
   double taper_depth = 0.0;
+  // The fade-in's own depth delta [m] where it differs from taper_depth (0: taper_depth), and
+  // its form (MpsParameters::BackgroundFade): blend keeps p_b linear and scales S instead.
+  double fade_depth = 0.0;
+  bool blend_fade = false;
   const std::vector<Eigen::Vector3d>* positions = nullptr;
   const std::vector<ParticleKind>* kinds = nullptr;
   const PeriodicBoundary* periodic = nullptr;  // nullptr: none
@@ -58,6 +63,7 @@ struct BackgroundField {
   std::vector<Eigen::Vector3d> gradient;  // grad p_b [Pa/m]
   std::vector<double> trust;              // S [-]
   std::vector<double> fade;               // f' = min(d / delta, 1), 0 without a column [-]
+                                          // (blend: 1, the fade is in S)
 };
 
 void hydrostatic_background(const BackgroundInput& in, BackgroundField& out);

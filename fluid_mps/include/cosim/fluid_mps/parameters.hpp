@@ -194,6 +194,18 @@ struct MpsParameters {
   //           (docs/validation.md, rigid_canopy, eighth round).
   enum class BackgroundRepulsion { dynamic, full };
   BackgroundRepulsion background_repulsion = BackgroundRepulsion::dynamic;
+  // How the background fades in over the depth delta below the surface, where the operator
+  // still carries the surface particles' weight (hydrostatic_background.hpp):
+  //  taper: p_b = rho g f(d), f = d^2 / (2 delta) above delta; the operator sees q = p - p_b,
+  //         which is curved in that layer;
+  //  blend: p_b = rho g d stays linear and the trust S of the background's estimate is scaled
+  //         by min(d / delta, 1), so the layer steps with the operator on p at the surface and
+  //         with the background's below; every field the operator sees stays linear in still
+  //         water (docs/validation.md, rigid_canopy, ninth round).
+  enum class BackgroundFade { taper, blend };
+  BackgroundFade background_fade = BackgroundFade::taper;
+  // delta over the gradient radius r_e.
+  double background_fade_depth_over_re = 1.0;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
   // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
   double shifting_coefficient = 0.0;
@@ -247,6 +259,9 @@ inline constexpr scenario::Choices<MpsParameters::PressureBackground, 2> kPressu
 inline constexpr scenario::Choices<MpsParameters::BackgroundRepulsion, 2> kBackgroundRepulsions{
     {{"dynamic", MpsParameters::BackgroundRepulsion::dynamic},
      {"full", MpsParameters::BackgroundRepulsion::full}}};
+inline constexpr scenario::Choices<MpsParameters::BackgroundFade, 2> kBackgroundFades{
+    {{"taper", MpsParameters::BackgroundFade::taper},
+     {"blend", MpsParameters::BackgroundFade::blend}}};
 inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForms{
     {{"minimum", MpsParameters::GradientForm::minimum},
      {"symmetric", MpsParameters::GradientForm::symmetric},
@@ -342,6 +357,19 @@ void visit_parameters(P& p, V& v) {
              "(full, faded in with the background: the stiffness that lets a resting lattice "
              "settle)"),
     p.background_repulsion, kBackgroundRepulsions);
+  v(Key("background_fade")
+        .only_with(p.pressure_background == MpsParameters::PressureBackground::hydrostatic,
+                   "pressure_background: hydrostatic")
+        .doc("how the background fades in below the surface: taper (p_b = rho g d^2 / (2 delta) "
+             "above delta) or blend (p_b linear, the background's estimate weighed by "
+             "min(d / delta, 1) against the operator on p)"),
+    p.background_fade, kBackgroundFades);
+  v(Key("background_fade_depth_over_re")
+        .in(Range{0.0, 4.0, true})
+        .only_with(p.pressure_background == MpsParameters::PressureBackground::hydrostatic,
+                   "pressure_background: hydrostatic")
+        .doc("delta, the depth of the background's fade-in, over the gradient radius"),
+    p.background_fade_depth_over_re);
   v(Key("shifting_coefficient")
         .in(Range::between(0.0, 10.0))
         .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),
