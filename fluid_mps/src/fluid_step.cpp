@@ -439,6 +439,11 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
                                   &trusted_, pressure_change_, wall_pressure_change_,
                                   full_minimum_);
     }
+    if (p.background_replaces == MpsParameters::BackgroundReplaces::layer_mean) {
+      const double layer = p.density * p.gravity.norm() * 0.5 * p.particle_spacing;  // [Pa]
+      keep_layer_deviation(p.gradient_form, in, background_.pressure, layer, trusted_, rank_,
+                           background_taylor_, pressure_change_);
+    }
     in.pressure = &pressure_;
     pressure_gradients(p.gradient_form, in, untrusted_change_, untrusted_wall_change_, minimum_,
                        &untrusted_);

@@ -376,6 +376,56 @@ void add_full_pressure_repulsion(Form form, const GradientInput& in,
   }
 }
 
+void keep_layer_deviation(Form form, const GradientInput& in, const std::vector<double>& background,
+                          double layer_width, const std::vector<char>& evaluate,
+                          const std::vector<int>& order, std::vector<Eigen::Vector3d>& taylor,
+                          std::vector<Eigen::Vector3d>& gradient) {
+  const auto& kinds = *in.kinds;
+  const int n = static_cast<int>(kinds.size());
+  taylor.resize(n);
+  const double uncorrected = in.n0 / in.dimension;
+  auto counted = [&](int i) { return is_fluid(kinds[i]) && evaluate[i]; };
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (!counted(i)) continue;
+    const PairSums s = pair_sums(in, i, [&](int j) { return background[j] - background[i]; });
+    // The matrix the form applies (as add_full_pressure_repulsion's repulsion part).
+    Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
+    if (form == Form::corrected ||
+        (form == Form::corrected_interior && full_neighbourhood(in, i))) {
+      m = uncorrected * correction_matrix(in, i);
+    } else if (form == Form::corrected_blended || form == Form::corrected_split) {
+      const double w = correction_weight(in, i);
+      if (w > 0.0) m = (1.0 - w) * m + w * uncorrected * correction_matrix(in, i);
+    }
+    taylor[i] = m * s.all;
+  }
+  // Layer means, summed serially in `order` (the particles' own numbering): the same bits
+  // whatever the internal order or the thread count.
+  auto layer = [&](int i) {
+    return static_cast<std::size_t>(std::max(background[i], 0.0) / layer_width);
+  };
+  std::vector<Eigen::Vector3d> mean;
+  std::vector<int> count;
+  for (const int i : order) {
+    if (!counted(i)) continue;
+    const std::size_t b = layer(i);
+    if (b >= mean.size()) {
+      mean.resize(b + 1, Eigen::Vector3d::Zero());
+      count.resize(b + 1, 0);
+    }
+    mean[b] += taylor[i];
+    ++count[b];
+  }
+  for (std::size_t b = 0; b < mean.size(); ++b) {
+    if (count[b] > 0) mean[b] /= count[b];
+  }
+#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (counted(i)) gradient[i] += taylor[i] - mean[layer(i)];
+  }
+}
+
 double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& velocities,
                        const std::vector<int>& pressure_unknown, const ShiftingOptions& options,
                        std::vector<Eigen::Vector3d>& positions_out) {

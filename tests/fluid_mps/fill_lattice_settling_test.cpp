@@ -37,7 +37,8 @@ Settling settle(
     MpsParameters::FillLattice lattice,
     MpsParameters::PressureBackground background = MpsParameters::PressureBackground::none,
     MpsParameters::BackgroundRepulsion repulsion = MpsParameters::BackgroundRepulsion::dynamic,
-    MpsParameters::BackgroundFade fade = MpsParameters::BackgroundFade::taper) {
+    MpsParameters::BackgroundFade fade = MpsParameters::BackgroundFade::taper,
+    MpsParameters::BackgroundReplaces replaces = MpsParameters::BackgroundReplaces::particle) {
   MpsParameters p;
   p.dimension = 3;
   p.particle_spacing = 0.01;
@@ -50,6 +51,7 @@ Settling settle(
   p.pressure_background = background;
   p.background_repulsion = repulsion;
   p.background_fade = fade;
+  p.background_replaces = replaces;
   ParticleSet particles = still_water_tank_3d(p, 0.08, 0.08, 0.08, 0.12);
   FluidSystem system(p, std::move(particles));
   Settling s;
@@ -125,4 +127,23 @@ TEST(MpsFillLatticeSettling, BlendFadeStirsTheSurfaceLayerLessThanTheTaper) {
   // Measured: taper 5.85e-6 J/kg, blend 3.80e-6 over 1-1.5 s; levels within 0.0013 l0.
   EXPECT_LT(blend.kinetic, taper.kinetic);
   EXPECT_LT(std::abs(blend.level_at_start - blend.level_at_end), 0.01 * 0.01);
+}
+
+// What is left of the surface layer's stirring under the blend is the stiffness the background
+// takes away with the operator's part on p_b; keeping each particle's deviation from its layer's
+// mean gives it back (background_replaces: layer_mean).
+TEST(MpsFillLatticeSettling, BackgroundLayerMeanLetsTheSurfaceLayerSettle) {
+  using Background = MpsParameters::PressureBackground;
+  using Repulsion = MpsParameters::BackgroundRepulsion;
+  using Fade = MpsParameters::BackgroundFade;
+  using Replaces = MpsParameters::BackgroundReplaces;
+  const Settling particle = settle(MpsParameters::FillLattice::fcc, Background::hydrostatic,
+                                   Repulsion::full, Fade::blend, Replaces::particle);
+  const Settling layer = settle(MpsParameters::FillLattice::fcc, Background::hydrostatic,
+                                Repulsion::full, Fade::blend, Replaces::layer_mean);
+  std::cout << "[background layer mean] particle: u^2/2 " << particle.kinetic
+            << " J/kg; layer mean: drop " << layer.level_at_start - layer.level_at_end
+            << " m, u^2/2 " << layer.kinetic << " J/kg\n";
+  EXPECT_LT(layer.kinetic, particle.kinetic);
+  EXPECT_LT(std::abs(layer.level_at_start - layer.level_at_end), 0.01 * 0.01);
 }

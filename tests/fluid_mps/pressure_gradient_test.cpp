@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <random>
 
 #include "cosim/fluid_mps/boundaries.hpp"
@@ -750,4 +751,82 @@ TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
   }
   EXPECT_EQ(checked, columns * rows);
   EXPECT_GT(faded, columns);  // the top layers are within the fade-in
+}
+
+// background_replaces: layer_mean (keep_layer_deviation). The same column with one particle moved
+// 0.2 l0 down, the linear background of the blend fade-in (q = 0 everywhere): each particle
+// gets its Taylor part on p_b less the mean of its layer. The moved particle's sum departs from
+// its layer's (the dependence on the arrangement that the background alone takes away), the
+// added forces of every layer sum to zero (no net momentum), and particles with the same
+// neighbourhood get the same addition.
+TEST(MpsPressureGradient, LayerDeviationKeepsTheStiffnessAndNoNetForce) {
+  const double l0 = 0.01, radius_over_l0 = 3.1, rho = 1000.0, g = 9.81;
+  const int columns = 21, rows = 24;
+  Block b = block(2, columns, rows, l0, 0.0, radius_over_l0 * l0, 1);
+  int moved = -1;
+  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
+    const Eigen::Vector3d& r = b.positions[i];
+    if (b.kinds[i] == ParticleKind::fluid && std::abs(r.x() - 10 * l0) < 1e-9 &&
+        std::abs(r.y() - 8 * l0) < 1e-9)
+      moved = static_cast<int>(i);
+  }
+  ASSERT_GE(moved, 0);
+  b.positions[moved].y() -= 0.2 * l0;  // into its own row's layer (l0 / 2 thick)
+  const double radius = radius_over_l0 * l0;
+  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius), radius);
+  grid.build(b.positions);
+  b.list = grid.neighbours(b.positions, radius);
+  BackgroundInput background;
+  background.dimension = 2;
+  background.gravity = Eigen::Vector3d(0.0, -g, 0.0);
+  background.density = rho;
+  background.particle_spacing = l0;
+  background.taper_depth = radius;
+  background.blend_fade = true;
+  background.positions = &b.positions;
+  background.kinds = &b.kinds;
+  background.periodic = &b.periodic;
+  BackgroundField field;
+  hydrostatic_background(background, field);
+  b.pressure = field.pressure;
+  GradientInput in = b.input(2, radius_over_l0, l0);
+  const int n = static_cast<int>(b.kinds.size());
+  std::vector<char> everywhere(n, 1);
+  std::vector<int> order(n);
+  for (int i = 0; i < n; ++i) order[i] = n - 1 - i;
+  std::vector<Eigen::Vector3d> added(n, Eigen::Vector3d::Zero()), taylor;
+  const double layer = rho * g * 0.5 * l0;
+  keep_layer_deviation(Form::minimum, in, field.pressure, layer, everywhere, order, taylor, added);
+  const double factor = gradient_factor(2, in.n0);
+  std::cout << "[layer deviation] moved particle: vertical " << factor * added[moved].y()
+            << " Pa/m (rho g = " << rho * g << ")\n";
+  // Its neighbours are no longer symmetric about it: the sum's vertical moment is larger than its
+  // row's, and the added (negative) gradient pushes it back up (-655 Pa/m).
+  EXPECT_LT(factor * added[moved].y(), -0.01 * rho * g);
+  std::map<long, Eigen::Vector3d> sums;
+  std::map<long, double> scales;
+  for (int i = 0; i < n; ++i) {
+    if (b.kinds[i] != ParticleKind::fluid) continue;
+    const long k = static_cast<long>(std::max(field.pressure[i], 0.0) / layer);
+    sums.try_emplace(k, Eigen::Vector3d::Zero()).first->second += added[i];
+    scales[k] += taylor[i].norm();
+  }
+  for (const auto& [k, sum] : sums) EXPECT_LT(sum.norm(), 1e-12 * scales[k]) << "layer " << k;
+  // Two particles of a deep row with the same neighbourhood (away from the moved particle and the
+  // side walls, whose neighbours pull the layer's mean off theirs) get the same addition.
+  int pairs = 0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d& r = b.positions[i];
+    if (b.kinds[i] != ParticleKind::fluid || std::abs(r.y() - 16 * l0) > 1e-9) continue;
+    if (std::abs(r.x() - 7 * l0) > 1e-9) continue;
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector3d& s = b.positions[j];
+      if (b.kinds[j] == ParticleKind::fluid && std::abs(s.y() - r.y()) < 1e-9 &&
+          std::abs(s.x() - 13 * l0) < 1e-9) {
+        EXPECT_LT((added[i] - added[j]).norm(), 1e-9 * taylor[i].norm());
+        ++pairs;
+      }
+    }
+  }
+  EXPECT_EQ(pairs, 1);
 }

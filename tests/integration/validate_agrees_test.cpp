@@ -119,9 +119,9 @@ TEST(ValidateAgrees, BackgroundRepulsionWithoutItsBackgroundOrMinimumIsRefused) 
   EXPECT_EQ(validate(accepted).exit_code, 0) << validate(accepted).output;
 }
 
-// The background's fade and its depth: only with the background, and a depth of zero (a fade
-// over nothing) is out of range, at its line.
-TEST(ValidateAgrees, BackgroundFadeWithoutItsBackgroundOrOfNoDepthIsRefused) {
+// The background's fade, its depth and what it replaces: only with the background, and a depth
+// of zero (a fade over nothing) is out of range, at its line.
+TEST(ValidateAgrees, BackgroundKeysWithoutTheBackgroundOrOfNoDepthAreRefused) {
   const std::string blend = "    particle_spacing: 0.01\n    background_fade: blend\n";
   expect_refused(replace(kFluid, "    particle_spacing: 0.01\n", blend),
                  "scenario.yaml:8: key 'participants.fluid_mps.background_fade'",
@@ -131,9 +131,14 @@ TEST(ValidateAgrees, BackgroundFadeWithoutItsBackgroundOrOfNoDepthIsRefused) {
                          blend + background + "    background_fade_depth_over_re: 0\n"),
                  "scenario.yaml:10: key 'participants.fluid_mps.background_fade_depth_over_re'",
                  "value 0 is out of range (0, 4]");
-  const std::string accepted =
-      replace(kFluid, "    particle_spacing: 0.01\n",
-              blend + background + "    background_fade_depth_over_re: 2\n");
+  expect_refused(replace(kFluid, "    particle_spacing: 0.01\n",
+                         "    particle_spacing: 0.01\n    background_replaces: layer_mean\n"),
+                 "scenario.yaml:8: key 'participants.fluid_mps.background_replaces'",
+                 "only used with pressure_background: hydrostatic");
+  const std::string accepted = replace(kFluid, "    particle_spacing: 0.01\n",
+                                       blend + background +
+                                           "    background_fade_depth_over_re: 2\n"
+                                           "    background_replaces: layer_mean\n");
   EXPECT_EQ(validate(accepted).exit_code, 0) << validate(accepted).output;
 }
 

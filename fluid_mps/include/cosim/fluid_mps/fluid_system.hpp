@@ -251,7 +251,7 @@ class FluidSystem {
   // Work arrays of the step, kept so that a step allocates nothing once sizes have settled.
   std::vector<Eigen::Vector3d> velocity_star_, position_star_, wall_viscous_, correction_,
       wall_correction_, pressure_change_, wall_pressure_change_, untrusted_change_,
-      untrusted_wall_change_;
+      untrusted_wall_change_, background_taylor_;
   std::vector<double> density_now_, divergence_, rhs_, solution_, pressure_, minimum_,
       full_minimum_, dynamic_pressure_;
   BackgroundField background_;

@@ -17,17 +17,17 @@
 // over the depth delta below the surface (f = d^2 / (2 delta) above delta, d - delta / 2 below,
 // so f' = min(d / delta, 1)): in that layer the operator still carries the particles' weight, as
 // without a background. With blend_fade, f = d (p_b linear) and S is scaled by min(d / delta, 1)
-// instead: the same handover, but the operator never sees the taper's curvature. S is the trust in the column, 0 to 1, interpolated as eta: within reach
-// of the operator from the smoothing window (2 + delta / l0 bins either way) the surface heights
-// and the bed heights (the lowest water of each column) must each span at most delta for 1, and
-// S is 0 from 2 delta on (a steep face, a surge front, a brink, a nappe, a crest or the top of a
-// partition: the column height says little of the pressure there), a smoothstep between; S is
-// also 0 within reach of water whose lowest particle has no wall within the gap below or beside
-// it (a nappe past a brink, a falling jet), and within three depths of the water over such a
-// column or over the higher side of a step in the bed (the flow over a brink or a crest curves a
-// few depths upstream of it), where that is farther. Bins farther than two from any water have no
-// background. Periodic channels wrap the bins (with the period's drop). grad p_b is the exact
-// gradient of this field.
+// instead: the same handover, but the operator never sees the taper's curvature. S is the trust in
+// the column, 0 to 1, interpolated as eta: within reach of the operator from the smoothing window
+// (2 + delta / l0 bins either way) the surface heights and the bed heights (the lowest water of
+// each column) must each span at most delta for 1, and S is 0 from 2 delta on (a steep face, a
+// surge front, a brink, a nappe, a crest or the top of a partition: the column height says little
+// of the pressure there), a smoothstep between; S is also 0 within reach of water whose lowest
+// particle has no wall within the gap below or beside it (a nappe past a brink, a falling jet), and
+// within three depths of the water over such a column or over the higher side of a step in the bed
+// (the flow over a brink or a crest curves a few depths upstream of it), where that is farther.
+// Bins farther than two from any water have no background. Periodic channels wrap the bins (with
+// the period's drop). grad p_b is the exact gradient of this field.
 //
 // The fluid step weighs two whole estimates by S: S (<grad q>_i + grad p_b) + (1 - S) <grad p>_i,
 // so that no gradient of S (rho g times the whole depth over a few bins) enters the force, and

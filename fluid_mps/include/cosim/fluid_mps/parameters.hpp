@@ -206,6 +206,15 @@ struct MpsParameters {
   BackgroundFade background_fade = BackgroundFade::taper;
   // delta over the gradient radius r_e.
   double background_fade_depth_over_re = 1.0;
+  // What the background's exact gradient replaces of the operator's Taylor part on p_b
+  // (keep_layer_deviation in pressure_gradient.hpp):
+  //  particle:   each particle's own (the operator sees q alone; a resting lattice loses the
+  //              stiffness that sum's dependence on the arrangement gives);
+  //  layer_mean: only its mean over the particles at the same depth (layers l0 / 2 thick), the
+  //              operator's bias; each particle keeps its deviation from it, the default's
+  //              stiffness (docs/validation.md, rigid_canopy, ninth round).
+  enum class BackgroundReplaces { particle, layer_mean };
+  BackgroundReplaces background_replaces = BackgroundReplaces::particle;
   // Particle shifting (Lind et al. 2012): dr = -A l0 |u| dt grad C away from crowded places,
   // velocities unchanged (momentum kept); A = 0 switches it off. Lind et al. use A of 1-6.
   double shifting_coefficient = 0.0;
@@ -262,6 +271,9 @@ inline constexpr scenario::Choices<MpsParameters::BackgroundRepulsion, 2> kBackg
 inline constexpr scenario::Choices<MpsParameters::BackgroundFade, 2> kBackgroundFades{
     {{"taper", MpsParameters::BackgroundFade::taper},
      {"blend", MpsParameters::BackgroundFade::blend}}};
+inline constexpr scenario::Choices<MpsParameters::BackgroundReplaces, 2> kBackgroundReplaces{
+    {{"particle", MpsParameters::BackgroundReplaces::particle},
+     {"layer_mean", MpsParameters::BackgroundReplaces::layer_mean}}};
 inline constexpr scenario::Choices<MpsParameters::GradientForm, 7> kGradientForms{
     {{"minimum", MpsParameters::GradientForm::minimum},
      {"symmetric", MpsParameters::GradientForm::symmetric},
@@ -370,6 +382,13 @@ void visit_parameters(P& p, V& v) {
                    "pressure_background: hydrostatic")
         .doc("delta, the depth of the background's fade-in, over the gradient radius"),
     p.background_fade_depth_over_re);
+  v(Key("background_replaces")
+        .only_with(p.pressure_background == MpsParameters::PressureBackground::hydrostatic,
+                   "pressure_background: hydrostatic")
+        .doc("what the background's exact gradient replaces of the operator's part on p_b: each "
+             "particle's own (particle) or only its mean over each depth layer (layer_mean: the "
+             "particles keep their deviation from it, the lattice's stiffness)"),
+    p.background_replaces, kBackgroundReplaces);
   v(Key("shifting_coefficient")
         .in(Range::between(0.0, 10.0))
         .doc("A of particle shifting dr = -A l0 |u| dt grad C (Lind et al. 2012); 0: off"),

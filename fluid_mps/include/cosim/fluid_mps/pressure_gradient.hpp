@@ -72,6 +72,21 @@ void add_full_pressure_repulsion(MpsParameters::GradientForm form, const Gradien
                                  std::vector<Eigen::Vector3d>& wall,
                                  std::vector<double>& full_minimum);
 
+// background_replaces: layer_mean (issue 16, ninth round). Under the background the operator's
+// Taylor part on p_b, T_i = sum (p_b,j - p_b,i) F_ij with the form's matrix, is replaced by the
+// exact grad p_b. T_i's dependence on where the particles sit is the lattice's stiffness (a
+// particle pushed out of place meets a changed sum); only its mean over the particles of the same
+// depth is the operator's bias. This adds back T_i - <T>_layer at every fluid particle
+// `evaluate` marks, layers `layer_width` [Pa] of p_b thick: the bias stays replaced, the
+// stiffness is the default operator's again, and each layer's added forces sum to zero (no net
+// momentum). `order` lists the particles in the order their layer sums are taken; `taylor` is a
+// work array.
+void keep_layer_deviation(MpsParameters::GradientForm form, const GradientInput& in,
+                          const std::vector<double>& background, double layer_width,
+                          const std::vector<char>& evaluate, const std::vector<int>& order,
+                          std::vector<Eigen::Vector3d>& taylor,
+                          std::vector<Eigen::Vector3d>& gradient);
+
 // The correction matrix of Khayyer & Gotoh (2011), Appl. Ocean Res. 33: C_i = [sum_j w_ij
 // r_ij (x) r_ij / |r_ij|^2]^-1 over the non-dummy neighbours (the D x D block; the rest of the
 // 3 x 3 matrix is zero in 2D). It is d/n0 times the identity on a full lattice. Where the
