@@ -112,7 +112,7 @@ TEST(MpsFillLatticeSettling, BackgroundWithFullRepulsionLetsFccWaterSettle) {
 // The taper makes q = p - p_b curved in the fade-in layer, and the operator's error on a curved
 // field over a disordered neighbourhood stirs that layer; the blend keeps every field linear
 // (docs/validation.md, rigid_canopy, ninth round).
-TEST(MpsFillLatticeSettling, BlendFadeStirsTheSurfaceLayerLessThanTheTaper) {
+TEST(MpsFillLatticeSettling, BackgroundBlendFadeStirsTheSurfaceLayerLessThanTheTaper) {
   using Background = MpsParameters::PressureBackground;
   using Repulsion = MpsParameters::BackgroundRepulsion;
   using Fade = MpsParameters::BackgroundFade;
@@ -144,6 +144,7 @@ TEST(MpsFillLatticeSettling, BackgroundLayerMeanLetsTheSurfaceLayerSettle) {
   std::cout << "[background layer mean] particle: u^2/2 " << particle.kinetic
             << " J/kg; layer mean: drop " << layer.level_at_start - layer.level_at_end
             << " m, u^2/2 " << layer.kinetic << " J/kg\n";
+  // Measured: particle 3.80e-6 J/kg, layer mean 2.51e-6 over 1-1.5 s; level within 0.0012 l0.
   EXPECT_LT(layer.kinetic, particle.kinetic);
   EXPECT_LT(std::abs(layer.level_at_start - layer.level_at_end), 0.01 * 0.01);
 }
