@@ -213,6 +213,21 @@ double correction_weight(const GradientInput& in, int i) {
 
 namespace {
 
+// The matrix `form` applies to particle i's sum: n0/d C_i for the corrected forms where they
+// correct, blended by the neighbourhood's fullness for corrected_blended (and for
+// corrected_split's Taylor part when `split_taylor`; its repulsion stays plain), else I.
+Eigen::Matrix3d form_matrix(Form form, const GradientInput& in, int i, bool split_taylor) {
+  const double uncorrected = in.n0 / in.dimension;
+  if (form == Form::corrected || (form == Form::corrected_interior && full_neighbourhood(in, i)))
+    return uncorrected * correction_matrix(in, i);
+  if (form == Form::corrected_blended || (split_taylor && form == Form::corrected_split)) {
+    const double w = correction_weight(in, i);
+    if (w > 0.0)
+      return (1.0 - w) * Eigen::Matrix3d::Identity() + w * uncorrected * correction_matrix(in, i);
+  }
+  return Eigen::Matrix3d::Identity();
+}
+
 // The gradient sum of fluid particle i by `form` and the walls' share of it (see
 // pressure_gradients); `minimum` holds p^_i, `normals` the wall normals (symmetric_normal_wall).
 void gradient_at(Form form, const GradientInput& in, int i, const std::vector<double>& minimum,
@@ -354,7 +369,6 @@ void add_full_pressure_repulsion(Form form, const GradientInput& in,
   GradientInput full = in;
   full.pressure = &full_pressure;
   neighbourhood_minimum(full, full_minimum, evaluate);
-  const double uncorrected = in.n0 / in.dimension;
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
@@ -362,15 +376,7 @@ void add_full_pressure_repulsion(Form form, const GradientInput& in,
         fade[i] * ((full_pressure[i] - full_minimum[i]) - (q[i] - dynamic_minimum[i]));  // [Pa]
     if (extra == 0.0) continue;
     const PairSums unit = pair_sums(in, i, [](int) { return 1.0; });
-    // The matrix the form applies to its repulsion part (corrected_split leaves it plain).
-    Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
-    if (form == Form::corrected ||
-        (form == Form::corrected_interior && full_neighbourhood(in, i))) {
-      m = uncorrected * correction_matrix(in, i);
-    } else if (form == Form::corrected_blended) {
-      const double w = correction_weight(in, i);
-      if (w > 0.0) m = (1.0 - w) * m + w * uncorrected * correction_matrix(in, i);
-    }
+    const Eigen::Matrix3d m = form_matrix(form, in, i, false);  // split leaves the repulsion plain
     gradient[i] += extra * (m * unit.all);
     wall[i] += extra * (m * unit.wall);
   }
@@ -383,22 +389,12 @@ void keep_layer_deviation(Form form, const GradientInput& in, const std::vector<
   const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
   taylor.resize(n);
-  const double uncorrected = in.n0 / in.dimension;
   auto counted = [&](int i) { return is_fluid(kinds[i]) && evaluate[i]; };
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!counted(i)) continue;
     const PairSums s = pair_sums(in, i, [&](int j) { return background[j] - background[i]; });
-    // The matrix the form applies (as add_full_pressure_repulsion's repulsion part).
-    Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
-    if (form == Form::corrected ||
-        (form == Form::corrected_interior && full_neighbourhood(in, i))) {
-      m = uncorrected * correction_matrix(in, i);
-    } else if (form == Form::corrected_blended || form == Form::corrected_split) {
-      const double w = correction_weight(in, i);
-      if (w > 0.0) m = (1.0 - w) * m + w * uncorrected * correction_matrix(in, i);
-    }
-    taylor[i] = m * s.all;
+    taylor[i] = form_matrix(form, in, i, true) * s.all;
   }
   // Layer means, summed serially in `order` (the particles' own numbering): the same bits
   // whatever the internal order or the thread count.

@@ -661,6 +661,46 @@ TEST(MpsPressureGradient, EvaluatingSomeParticlesGivesTheirSumsBitForBit) {
   }
 }
 
+// A regular 2D column of water at rest (21 x 24 particles, l0 = 1 cm, radius 3.1 l0) with the
+// particle of column 10, row 8 moved by `shift`, its pair list, and its hydrostatic background
+// (the blend's linear one with `blend`).
+constexpr double kColumnSpacing = 0.01, kColumnRadiusOverL0 = 3.1;
+constexpr int kColumnColumns = 21, kColumnRows = 24;
+struct MovedColumn {
+  Block block;
+  int moved = -1;
+  BackgroundField field;
+};
+MovedColumn moved_column(const Eigen::Vector3d& shift, bool blend) {
+  const double l0 = kColumnSpacing, radius = kColumnRadiusOverL0 * kColumnSpacing;
+  MovedColumn c;
+  Block& b = c.block;
+  b = block(2, kColumnColumns, kColumnRows, l0, 0.0, radius, 1);
+  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
+    const Eigen::Vector3d& r = b.positions[i];
+    if (b.kinds[i] == ParticleKind::fluid && std::abs(r.x() - 10 * l0) < 1e-9 &&
+        std::abs(r.y() - 8 * l0) < 1e-9)
+      c.moved = static_cast<int>(i);
+  }
+  if (c.moved < 0) return c;
+  b.positions[c.moved] += shift;
+  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius), radius);
+  grid.build(b.positions);
+  b.list = grid.neighbours(b.positions, radius);
+  BackgroundInput background;
+  background.dimension = 2;
+  background.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
+  background.density = 1000.0;
+  background.particle_spacing = l0;
+  background.taper_depth = radius;
+  background.blend_fade = blend;
+  background.positions = &b.positions;
+  background.kinds = &b.kinds;
+  background.periodic = &b.periodic;
+  hydrostatic_background(background, c.field);
+  return c;
+}
+
 // background_repulsion: full (add_full_pressure_repulsion). On a regular column of water at rest
 // with its hydrostatic pressure, one deep particle moved 0.2 l0 sideways: the form on q alone
 // barely pushes it (q is the same constant all around it, so neither its Taylor part nor its
@@ -669,39 +709,19 @@ TEST(MpsPressureGradient, EvaluatingSomeParticlesGivesTheirSumsBitForBit) {
 // (faded in with the background): the whole pressure's minimum form less the form's own Taylor
 // part on p_b, below the fade-in layer.
 TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
-  const double l0 = 0.01, radius_over_l0 = 3.1, rho = 1000.0, g = 9.81;
-  const int columns = 21, rows = 24;
-  Block b = block(2, columns, rows, l0, 0.0, radius_over_l0 * l0, 1);
-  int moved = -1;
-  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
-    const Eigen::Vector3d& r = b.positions[i];
-    if (b.kinds[i] == ParticleKind::fluid && std::abs(r.x() - 10 * l0) < 1e-9 &&
-        std::abs(r.y() - 8 * l0) < 1e-9)
-      moved = static_cast<int>(i);
-  }
-  ASSERT_GE(moved, 0);
+  const double l0 = kColumnSpacing, rho = 1000.0, g = 9.81, radius_over_l0 = kColumnRadiusOverL0;
+  const int rows = kColumnRows, columns = kColumnColumns;
   const double shift = 0.2 * l0;
-  b.positions[moved].x() += shift;
-  const double radius = radius_over_l0 * l0;
-  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius), radius);
-  grid.build(b.positions);
-  b.list = grid.neighbours(b.positions, radius);
+  MovedColumn column = moved_column(Eigen::Vector3d(shift, 0.0, 0.0), false);
+  Block& b = column.block;
+  const int moved = column.moved;
+  ASSERT_GE(moved, 0);
+  const BackgroundField& field = column.field;
   const double surface = (rows - 0.5) * l0;
   b.pressure.assign(b.kinds.size(), 0.0);
   for (std::size_t i = 0; i < b.kinds.size(); ++i) {
     if (b.kinds[i] != ParticleKind::dummy) b.pressure[i] = rho * g * (surface - b.positions[i].y());
   }
-  BackgroundInput background;
-  background.dimension = 2;
-  background.gravity = Eigen::Vector3d(0.0, -g, 0.0);
-  background.density = rho;
-  background.particle_spacing = l0;
-  background.taper_depth = radius;
-  background.positions = &b.positions;
-  background.kinds = &b.kinds;
-  background.periodic = &b.periodic;
-  BackgroundField field;
-  hydrostatic_background(background, field);
   const std::vector<double> whole_pressure = b.pressure;
   GradientInput in = b.input(2, radius_over_l0, l0);
   std::vector<Eigen::Vector3d> whole, whole_wall;
@@ -760,34 +780,13 @@ TEST(MpsPressureGradient, FullRepulsionPushesAMovedParticleBack) {
 // added forces of every layer sum to zero (no net momentum), and particles with the same
 // neighbourhood get the same addition.
 TEST(MpsPressureGradient, LayerDeviationKeepsTheStiffnessAndNoNetForce) {
-  const double l0 = 0.01, radius_over_l0 = 3.1, rho = 1000.0, g = 9.81;
-  const int columns = 21, rows = 24;
-  Block b = block(2, columns, rows, l0, 0.0, radius_over_l0 * l0, 1);
-  int moved = -1;
-  for (std::size_t i = 0; i < b.kinds.size(); ++i) {
-    const Eigen::Vector3d& r = b.positions[i];
-    if (b.kinds[i] == ParticleKind::fluid && std::abs(r.x() - 10 * l0) < 1e-9 &&
-        std::abs(r.y() - 8 * l0) < 1e-9)
-      moved = static_cast<int>(i);
-  }
+  const double l0 = kColumnSpacing, rho = 1000.0, g = 9.81, radius_over_l0 = kColumnRadiusOverL0;
+  // Down into its own row's layer (l0 / 2 thick).
+  MovedColumn column = moved_column(Eigen::Vector3d(0.0, -0.2 * l0, 0.0), true);
+  Block& b = column.block;
+  const int moved = column.moved;
   ASSERT_GE(moved, 0);
-  b.positions[moved].y() -= 0.2 * l0;  // into its own row's layer (l0 / 2 thick)
-  const double radius = radius_over_l0 * l0;
-  NeighbourGrid grid(2, bounding_box(b.positions, 2, radius), radius);
-  grid.build(b.positions);
-  b.list = grid.neighbours(b.positions, radius);
-  BackgroundInput background;
-  background.dimension = 2;
-  background.gravity = Eigen::Vector3d(0.0, -g, 0.0);
-  background.density = rho;
-  background.particle_spacing = l0;
-  background.taper_depth = radius;
-  background.blend_fade = true;
-  background.positions = &b.positions;
-  background.kinds = &b.kinds;
-  background.periodic = &b.periodic;
-  BackgroundField field;
-  hydrostatic_background(background, field);
+  const BackgroundField& field = column.field;
   b.pressure = field.pressure;
   GradientInput in = b.input(2, radius_over_l0, l0);
   const int n = static_cast<int>(b.kinds.size());
