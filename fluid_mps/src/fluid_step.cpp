@@ -440,6 +440,8 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
                                   full_minimum_);
     }
     if (p.background_replaces == MpsParameters::BackgroundReplaces::layer_mean) {
+      // Into the trusted estimate (weighed by S below), booked with the fluid's own pressure:
+      // a layer's deviations sum to zero, walls' partners included. Layers l0 / 2 of depth.
       const double layer = p.density * p.gravity.norm() * 0.5 * p.particle_spacing;  // [Pa]
       keep_layer_deviation(p.gradient_form, in, background_.pressure, layer, trusted_, rank_,
                            background_taylor_, pressure_change_);
