@@ -114,7 +114,8 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
     own_row_[k] = kind_[k] == ParticleKind::dummy ? 0 : 1;
     any_dummy = any_dummy || own_row_[k] == 0;
   }
-  grid.neighbours_by_key(x, list_radius, order_, neighbours_, any_dummy ? &own_row_ : nullptr);
+  grid.neighbours_by_key(x, list_radius, order_, neighbours_, any_dummy ? &own_row_ : nullptr,
+                         &search_work_);
   near_.offset = neighbours_.offset;
   near_.index.resize(neighbours_.pair_count());
   near_.distance.resize(neighbours_.pair_count());

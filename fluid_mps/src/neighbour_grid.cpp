@@ -286,7 +286,8 @@ std::size_t NeighbourGrid::candidates_in_reach(int i, const Eigen::Vector3d& xi,
 
 void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
                                       const std::vector<int>& key, NeighbourList& list,
-                                      const std::vector<char>* rows) const {
+                                      const std::vector<char>* rows,
+                                      NeighbourSearchWork* work) const {
   if (rows && rows->size() != positions.size()) {
     throw std::invalid_argument("NeighbourGrid::neighbours_by_key: rows and positions differ");
   }
@@ -305,23 +306,27 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
   // otherwise tip the split) and collects its pairs in its own buffer; segment[i] is where
   // particle i's partners start there. The split decides only who computes a row, not what.
   const int threads = n >= 4096 ? omp_get_max_threads() : 1;
-  std::vector<std::vector<int>> block_index(threads);
-  std::vector<std::int64_t> segment(n, 0);
-  std::vector<int> owner(n, 0);
+  NeighbourSearchWork own_work;
+  NeighbourSearchWork& w = work ? *work : own_work;
+  w.thread_index.resize(std::max<std::size_t>(w.thread_index.size(), threads));
+  w.segment.resize(n);
+  w.owner.resize(n);
+  std::vector<std::int64_t>& segment = w.segment;
+  std::vector<int>& owner = w.owner;
   // Rows before each cell (without `rows`, every listed particle has one: cell_start_).
   const std::vector<std::int64_t>* row_start = &cell_start_;
-  std::vector<std::int64_t> wanted_start;
   if (rows) {
-    wanted_start.assign(static_cast<std::size_t>(cell_count) + 1, 0);
+    w.wanted_start.assign(static_cast<std::size_t>(cell_count) + 1, 0);
     for (std::int64_t c = 0; c < cell_count; ++c) {
       std::int64_t wanted = 0;
       for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s)
         wanted += static_cast<std::int64_t>(wants_row(sorted_[s]));
-      wanted_start[c + 1] = wanted_start[c] + wanted;
+      w.wanted_start[c + 1] = w.wanted_start[c] + wanted;
     }
-    row_start = &wanted_start;
+    row_start = &w.wanted_start;
   }
   const std::int64_t listed = row_start->back();
+  bool rows_in_order = true;  // one thread found the rows in ascending i: its buffer is the list
 #pragma omp parallel num_threads(threads) if (n >= 4096)
   {
     const int thread = omp_get_thread_num(), count = omp_get_num_threads();
@@ -332,8 +337,12 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
     };
     const std::int64_t c_begin = first_cell(thread);
     const std::int64_t c_end = thread + 1 == count ? cell_count : first_cell(thread + 1);
-    std::vector<int>& index = block_index[thread];
+    // The buffer's size is its capacity: it only grows (and is zero-filled) when a search
+    // finds more pairs than any before; `used` counts the slots of this search.
+    std::vector<int>& index = w.thread_index[thread];
+    std::size_t used = 0;
     KeyedScratch scratch;
+    int last_row = -1;
     for (std::int64_t c = c_begin; c < c_end; ++c) {
       // A cell none of whose particles wants a row of its own is not searched at all.
       if ((*row_start)[c + 1] == (*row_start)[c]) continue;
@@ -341,24 +350,34 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
       for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
         const int i = sorted_[s];
         if (!wants_row(i)) continue;  // an empty row: offset stays 0
-        const std::size_t at = index.size();
-        segment[i] = static_cast<std::int64_t>(at);
+        segment[i] = static_cast<std::int64_t>(used);
         owner[i] = thread;
-        index.resize(at + scratch.cj.size());
+        if (count == 1 && i < last_row) rows_in_order = false;
+        last_row = i;
+        if (used + scratch.cj.size() > index.size()) {
+          index.resize(std::max(2 * index.size(), used + scratch.cj.size()));
+        }
         const std::size_t found =
-            candidates_in_reach(i, positions[i], radius2, scratch, index.data() + at);
-        index.resize(at + found);
+            candidates_in_reach(i, positions[i], radius2, scratch, index.data() + used);
+        used += found;
         list.offset[i + 1] = static_cast<std::int64_t>(found);
       }
     }
   }
   for (int i = 0; i < n; ++i) list.offset[i + 1] += list.offset[i];
+  if (threads == 1 && rows_in_order) {
+    // Rows without partners (or without a row) take no slots, so the buffer is the list; the
+    // list's old storage becomes the next search's buffer.
+    list.index.swap(w.thread_index[0]);
+    list.index.resize(list.offset[n]);  // shrinks: nothing is filled
+    return;
+  }
   list.index.resize(list.offset[n]);
 #pragma omp parallel for schedule(static) num_threads(threads) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     const std::int64_t length = list.offset[i + 1] - list.offset[i];
     if (length == 0) continue;
-    const auto from = block_index[owner[i]].begin() + segment[i];
+    const auto from = w.thread_index[owner[i]].begin() + segment[i];
     std::copy(from, from + length, list.index.begin() + list.offset[i]);
   }
 }

@@ -9,6 +9,8 @@
 #include <random>
 #include <sstream>
 
+#include <omp.h>
+
 #include "cosim/fluid_mps/kernels.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/operators.hpp"
@@ -160,6 +162,54 @@ TEST(MpsNeighbourGrid, KeyedSearchWithRowMaskKeepsTheOtherRows) {
   }
 }
 
+// The keyed search keeps its work arrays between searches (NeighbourSearchWork): a search
+// that reuses them, into a list that held another search's pairs, gives the list of a fresh
+// search, with one and two threads. The searches: particles in cell order (one thread then
+// takes the buffer as the list), the same particles moved (rows out of order: copied), and more
+// particles, so more pairs than the buffers held (they grow).
+TEST(MpsNeighbourGrid, KeyedSearchReusingItsWorkGivesTheListsOfFreshSearches) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0), jitter(-0.02, 0.02);
+  const double radius = 0.1;
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.1, -0.1, -0.1), Eigen::Vector3d(1.1, 1.1, 1.1));
+  std::vector<std::vector<Eigen::Vector3d>> sets;
+  std::vector<Eigen::Vector3d> first(5000);
+  for (auto& p : first) p = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  NeighbourGrid sorter(3, box, radius);
+  sorter.build(first);
+  std::vector<Eigen::Vector3d> in_cell_order;
+  for (int i : sorter.cell_order()) in_cell_order.push_back(first[i]);
+  sets.push_back(in_cell_order);
+  std::vector<Eigen::Vector3d> moved = in_cell_order;
+  for (auto& p : moved) p += Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+  sets.push_back(moved);
+  std::vector<Eigen::Vector3d> more = moved;
+  for (int i = 0; i < 3000; ++i) more.emplace_back(u(rng), u(rng), u(rng));
+  sets.push_back(more);
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    NeighbourSearchWork work;
+    NeighbourList reused;
+    for (std::size_t set = 0; set < sets.size(); ++set) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, search " << set);
+      const auto& points = sets[set];
+      const int n = static_cast<int>(points.size());
+      std::vector<int> key(n);
+      for (int i = 0; i < n; ++i) key[i] = (i * 7919) % n;
+      NeighbourGrid grid(3, box, radius);
+      grid.build(points);
+      grid.neighbours_by_key(points, radius, key, reused, nullptr, &work);
+      NeighbourList fresh;
+      grid.neighbours_by_key(points, radius, key, fresh);
+      EXPECT_EQ(reused.offset, fresh.offset);
+      EXPECT_EQ(reused.index, fresh.index);
+      EXPECT_GT(fresh.pair_count(), static_cast<std::size_t>(10 * n));  // about 20 a particle
+    }
+  }
+  omp_set_num_threads(threads_before);
+}
+
 TEST(MpsPressureSolver, SolvesOneDimensionalPoisson) {
   // -x[i-1] + 2 x[i] - x[i+1] = h^2 with Dirichlet ends: x = i (n + 1 - i) / 2 on a unit grid.
   const int n = 200;
@@ -294,9 +344,10 @@ TEST(MpsPressureSolver, MatrixProductHasTheBitsOfThePlainRowLoop) {
 }
 
 // CG with the float-valued product on the MPS Laplacian (3D lattice, radius 3.1 l0 as in the 3D
-// scenes, p = 0 on two boundary layers, Jacobi): it converges to the tolerance in about as many
-// iterations, and its solution is that of the double product to well below the tolerance of the
-// pressure (true residual with the double matrix, relative difference of the solutions).
+// scenes, p = 0 on two boundary layers, Jacobi and aggregation): it converges in about as many
+// iterations, and with its true residuals (residual replacement) it meets the tolerance on the
+// double matrix, as the double product does (without them it stopped at 1.1e-7 with Jacobi);
+// its solution is that of the double product to the tolerance.
 TEST(MpsPressureSolver, SinglePrecisionProductConvergesToTheDoubleSolution) {
   const double radius = 3.1;
   const int count = 22;  // 18^3 unknowns inside 2 boundary layers
@@ -312,27 +363,34 @@ TEST(MpsPressureSolver, SinglePrecisionProductConvergesToTheDoubleSolution) {
   const SparseRows a = kernel_laplacian(list, points.size(), radius, inside, row_of);
   const int rows = a.rows();
   const std::vector<double> b = varying_rhs(rows);
-  std::vector<double> x_double(rows, 0.0), x_single(rows, 0.0);
-  PressureSolver double_solver(Preconditioner::jacobi), single_solver(Preconditioner::jacobi);
-  single_solver.set_single_precision_product(true);
-  const PcgResult d = double_solver.solve(a, b, x_double, 1e-8, 2000);
-  const PcgResult s = single_solver.solve(a, b, x_single, 1e-8, 2000);
-  ASSERT_TRUE(d.converged);
-  ASSERT_TRUE(s.converged);
-  EXPECT_LE(std::abs(s.iterations - d.iterations), 2) << d.iterations << " / " << s.iterations;
-  std::vector<double> ax;
-  multiply(a, x_single, ax);
-  double residual2 = 0.0, b2 = 0.0, difference = 0.0, largest = 0.0;
-  for (int i = 0; i < rows; ++i) {
-    residual2 += (b[i] - ax[i]) * (b[i] - ax[i]);
-    b2 += b[i] * b[i];
-    difference = std::max(difference, std::abs(x_single[i] - x_double[i]));
-    largest = std::max(largest, std::abs(x_double[i]));
+  for (const Preconditioner preconditioner :
+       {Preconditioner::jacobi, Preconditioner::aggregation}) {
+    SCOPED_TRACE(static_cast<int>(preconditioner));
+    std::vector<double> x_double(rows, 0.0), x_single(rows, 0.0);
+    PressureSolver double_solver(preconditioner), single_solver(preconditioner);
+    single_solver.set_single_precision_product(true);
+    const double tolerance = 1e-8;
+    const PcgResult d = double_solver.solve(a, b, x_double, tolerance, 2000);
+    const PcgResult s = single_solver.solve(a, b, x_single, tolerance, 2000);
+    ASSERT_TRUE(d.converged);
+    ASSERT_TRUE(s.converged);
+    EXPECT_LE(std::abs(s.iterations - d.iterations), 3) << d.iterations << " / " << s.iterations;
+    std::vector<double> ax;
+    multiply(a, x_single, ax);
+    double residual2 = 0.0, b2 = 0.0, difference = 0.0, largest = 0.0;
+    for (int i = 0; i < rows; ++i) {
+      residual2 += (b[i] - ax[i]) * (b[i] - ax[i]);
+      b2 += b[i] * b[i];
+      difference = std::max(difference, std::abs(x_single[i] - x_double[i]));
+      largest = std::max(largest, std::abs(x_double[i]));
+    }
+    std::cout << "[single product] " << rows << " unknowns: " << d.iterations << " / "
+              << s.iterations << " iterations, true residual " << std::sqrt(residual2 / b2)
+              << " (reported " << s.relative_residual << "), largest difference "
+              << difference / largest << " of the largest pressure\n";
+    EXPECT_LE(std::sqrt(residual2 / b2), tolerance);
+    EXPECT_NEAR(std::sqrt(residual2 / b2), s.relative_residual, 1e-3 * tolerance);
+    EXPECT_LT(difference, 1e-7 * largest);
+    EXPECT_GT(difference, 0.0);  // it is a different product: the bits change
   }
-  std::cout << "[single product] " << rows << " unknowns: " << d.iterations << " / " << s.iterations
-            << " iterations, true residual " << std::sqrt(residual2 / b2) << ", largest difference "
-            << difference / largest << " of the largest pressure\n";
-  EXPECT_LT(std::sqrt(residual2 / b2), 1e-6);
-  EXPECT_LT(difference, 1e-6 * largest);
-  EXPECT_GT(difference, 0.0);  // it is a different product: the bits change
 }

@@ -242,7 +242,8 @@ class FluidSystem {
   // Operators skip pairs beyond their own radius, so the sums do not depend on when the list
   // was built (a restarted run gives the same bits).
   NeighbourList neighbours_;
-  NeighbourList near_;  // find_near_pairs: same offsets as neighbours_
+  NeighbourSearchWork search_work_;  // the search's buffers, kept for the next search
+  NeighbourList near_;               // find_near_pairs: same offsets as neighbours_
   std::vector<std::int64_t> near_end_;
   std::vector<Eigen::Vector3d> search_positions_, scratch_, unshifted_velocity_;
   std::vector<char> include_, own_row_;  // grid membership; rows searched (not dummies)

@@ -30,6 +30,17 @@ struct NeighbourList {
 Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, int dimension,
                                  double margin);
 
+// Work arrays of NeighbourGrid::neighbours_by_key kept between searches: their capacity stays,
+// so a search after the first allocates nothing and touches no fresh pages (each search used to
+// grow one pair buffer a thread from empty, zero-filling every candidate's slot on the way).
+struct NeighbourSearchWork {
+  std::vector<std::vector<int>> thread_index;  // one thread's rows, in its cells' order (the
+                                               // size is the capacity, never shrunk)
+  std::vector<std::int64_t> segment;           // where row i starts in its thread's buffer
+  std::vector<int> owner;                      // the thread that found row i
+  std::vector<std::int64_t> wanted_start;      // rows before each cell (with a row mask)
+};
+
 class NeighbourGrid {
  public:
   // `box` must contain every position (the caller checks escapes first); 2D uses one z layer.
@@ -54,9 +65,11 @@ class NeighbourGrid {
   // per-particle sort is needed. Parallel; the same list whatever the thread count. With `rows`
   // (one entry a particle), a particle with rows[i] == 0 gets an empty row of its own but is
   // still a partner of the others: the rows of every other particle are those without `rows`.
+  // `work` (optional) keeps the work arrays for the next search.
   void neighbours_by_key(const std::vector<Eigen::Vector3d>& positions, double radius,
                          const std::vector<int>& key, NeighbourList& list,
-                         const std::vector<char>* rows = nullptr) const;
+                         const std::vector<char>* rows = nullptr,
+                         NeighbourSearchWork* work = nullptr) const;
 
   // Included particles cell by cell (cells in memory order, z slowest), each cell's in index
   // order: an order along the cells for memory locality.
