@@ -92,8 +92,9 @@ class PressureSolver {
                   const SparseRows* hierarchy_matrix = nullptr);
   Preconditioner preconditioner() const { return preconditioner_; }
   // The products of the CG iterations read the matrix values rounded to float (fewer bytes an
-  // entry; sums, vectors and the initial residual stay double). Off by default: it changes the
-  // bits of the solution (docs/performance.md, single-precision product).
+  // entry; sums, vectors and the initial residual stay double, and true residuals with the
+  // double values decide the stop). Off by default: it changes the bits of the solution and
+  // gains only on large 3D systems (docs/performance.md, single-precision product).
   void set_single_precision_product(bool on) { work_.single_precision = on; }
   bool single_precision_product() const { return work_.single_precision; }
   // The preconditioner a system of `rows` unknowns gets (automatic resolved).
