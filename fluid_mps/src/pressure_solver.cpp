@@ -197,22 +197,23 @@ double multiply_dot(const RowView& m, const std::vector<double>& p, std::vector<
   return total;
 }
 
-// x += alpha p, r -= alpha q; with `inverse_diagonal` also z = D^-1 r (Jacobi). Returns r . r
-// and, with the diagonal, r . z in `rz`.
-double update_residual(double alpha, const std::vector<double>& p, const std::vector<double>& q,
-                       std::vector<double>& x, std::vector<double>& r, std::vector<double>& z,
-                       const std::vector<double>* inverse_diagonal, std::vector<double>& partial,
-                       double& rz) {
+// One pass over the blocks of dot() that sets the residual: `prepare(begin, end)` runs first on
+// each block, then r_i = next_residual(i) for its rows; with `inverse_diagonal` also z = D^-1 r.
+// Returns r . r and, with the diagonal, r . z in `rz`, each summed as dot() sums.
+template <class Prepare, class NextResidual>
+double residual_pass(std::vector<double>& r, std::vector<double>& z,
+                     const std::vector<double>* inverse_diagonal, std::vector<double>& partial,
+                     double& rz, Prepare&& prepare, NextResidual&& next_residual) {
   const int n = static_cast<int>(r.size()), blocks = block_count(n);
   partial.resize(2 * static_cast<std::size_t>(blocks));
   if (inverse_diagonal) z.resize(n);
 #pragma omp parallel for schedule(static) if (blocks >= 4)
   for (int block = 0; block < blocks; ++block) {
     const int end = std::min(n, (block + 1) * kBlock);
+    prepare(block * kBlock, end);
     double rr_sum = 0.0, rz_sum = 0.0;
     for (int i = block * kBlock; i < end; ++i) {
-      x[i] += alpha * p[i];
-      r[i] -= alpha * q[i];
+      r[i] = next_residual(i);
       if (inverse_diagonal) {
         z[i] = (*inverse_diagonal)[i] * r[i];
         rz_sum += r[i] * z[i];
@@ -231,37 +232,28 @@ double update_residual(double alpha, const std::vector<double>& p, const std::ve
   return rr;
 }
 
-// r = b - A x with the matrix `m` (q is overwritten); with `inverse_diagonal` also z = D^-1 r
-// and r . z in `rz`. Returns r . r, summed as update_residual() sums.
+// x += alpha p, r -= alpha q (and z, r . r, r . z as residual_pass()).
+double update_residual(double alpha, const std::vector<double>& p, const std::vector<double>& q,
+                       std::vector<double>& x, std::vector<double>& r, std::vector<double>& z,
+                       const std::vector<double>* inverse_diagonal, std::vector<double>& partial,
+                       double& rz) {
+  return residual_pass(
+      r, z, inverse_diagonal, partial, rz, [](int, int) {},
+      [&](int i) {
+        x[i] += alpha * p[i];
+        return r[i] - alpha * q[i];
+      });
+}
+
+// r = b - A x with the matrix `m` (q is overwritten; z, r . r, r . z as residual_pass()).
 double true_residual(const RowView& m, const std::vector<double>& rhs, const std::vector<double>& x,
                      std::vector<double>& q, std::vector<double>& r, std::vector<double>& z,
                      const std::vector<double>* inverse_diagonal, std::vector<double>& partial,
                      double& rz) {
-  const int n = static_cast<int>(r.size()), blocks = block_count(n);
-  partial.resize(2 * static_cast<std::size_t>(blocks));
-#pragma omp parallel for schedule(static) if (blocks >= 4)
-  for (int block = 0; block < blocks; ++block) {
-    const int end = std::min(n, (block + 1) * kBlock);
-    multiply_rows(m, x.data(), block * kBlock, end, q.data());
-    double rr_sum = 0.0, rz_sum = 0.0;
-    for (int i = block * kBlock; i < end; ++i) {
-      r[i] = rhs[i] - q[i];
-      if (inverse_diagonal) {
-        z[i] = (*inverse_diagonal)[i] * r[i];
-        rz_sum += r[i] * z[i];
-      }
-      rr_sum += r[i] * r[i];
-    }
-    partial[2 * block] = rr_sum;
-    partial[2 * block + 1] = rz_sum;
-  }
-  double rr = 0.0;
-  rz = 0.0;
-  for (int block = 0; block < blocks; ++block) {
-    rr += partial[2 * block];
-    rz += partial[2 * block + 1];
-  }
-  return rr;
+  return residual_pass(
+      r, z, inverse_diagonal, partial, rz,
+      [&](int begin, int end) { multiply_rows(m, x.data(), begin, end, q.data()); },
+      [&](int i) { return rhs[i] - q[i]; });
 }
 
 // Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r,
