@@ -2,6 +2,7 @@
 
 #include <omp.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -226,6 +227,35 @@ void NeighbourGrid::search_block(const Eigen::Array3i& cell, std::vector<int>& x
   x_range(cell.x(), 1, xs);
 }
 
+namespace {
+
+// Sorts `candidate` (key << 32 | index, keys distinct) by key, as std::sort sorts the values:
+// least-significant-digit radix sort on the key, 11 bits a pass, only as many passes as the
+// largest key needs (two below 4 M particles). In 3D a cell's block holds about 1 300
+// candidates, which std::sort took about 2.7 % of a step to order.
+void sort_by_key(std::vector<std::uint64_t>& candidate, std::vector<std::uint64_t>& buffer,
+                 std::uint32_t largest_key) {
+  constexpr int kBits = 11;
+  constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
+  std::array<std::uint32_t, std::size_t{1} << kBits> start;
+  buffer.resize(candidate.size());
+  for (int bit = 0; bit < 32 && (largest_key >> bit) != 0; bit += kBits) {
+    const int shift = 32 + bit;
+    start.fill(0);
+    for (const std::uint64_t c : candidate) ++start[(c >> shift) & kMask];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& s : start) {
+      const std::uint32_t here = s;
+      s = sum;
+      sum += here;
+    }
+    for (const std::uint64_t c : candidate) buffer[start[(c >> shift) & kMask]++] = c;
+    candidate.swap(buffer);
+  }
+}
+
+}  // namespace
+
 // The particles of the 3^D cells around cell c, sorted by key, with their positions.
 void NeighbourGrid::gather_candidates(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
                                       const std::vector<int>& key, KeyedScratch& s) const {
@@ -235,10 +265,12 @@ void NeighbourGrid::gather_candidates(std::int64_t c, const std::vector<Eigen::V
   Eigen::Array3i low, high;
   search_block(cell, s.xs, low, high);
   s.candidate.clear();
+  std::uint32_t largest_key = 0;
   visit_cells(s.xs, low, high, [&](int j) {
+    largest_key = std::max(largest_key, static_cast<std::uint32_t>(key[j]));
     s.candidate.push_back(static_cast<std::uint64_t>(key[j]) << 32 | static_cast<std::uint32_t>(j));
   });
-  std::sort(s.candidate.begin(), s.candidate.end());
+  sort_by_key(s.candidate, s.sorted, largest_key);
   const std::size_t count = s.candidate.size();
   s.cx.resize(count);
   s.cy.resize(count);

@@ -97,6 +97,7 @@ class NeighbourGrid {
   // Work arrays of neighbours_by_key, one set a thread.
   struct KeyedScratch {
     std::vector<std::uint64_t> candidate;  // key << 32 | particle, sorted
+    std::vector<std::uint64_t> sorted;     // the sort's second buffer
     std::vector<double> cx, cy, cz;        // their positions, in that order
     std::vector<int> cj;                   // and indices
     std::vector<double> distance2;
