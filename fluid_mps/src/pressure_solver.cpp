@@ -275,20 +275,19 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
   r.resize(n);
   p.resize(n);
   q.resize(n);
-  multiply(matrix, x, q);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) r[i] = rhs[i] - q[i];
-  precondition(r, z);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) p[i] = z[i];
-  double rz = dot(r, z, work.partial);
   // The initial residual is taken with the double matrix; with single values only the products
   // of the iterations use the rounded matrix (a relative change of at most 2^-24 an entry).
   const RowView view =
       row_view(matrix, work.short_column, work.single_precision ? &work.single_value : nullptr);
   RowView exact_view = view;  // the double values, for the true residuals below
   exact_view.single_value = nullptr;
-  double residual = std::sqrt(dot(r, r, work.partial)) / rhs_norm;
+  double unused_rz = 0.0;
+  const double rr0 = true_residual(exact_view, rhs, x, q, r, z, nullptr, work.partial, unused_rz);
+  precondition(r, z);
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) p[i] = z[i];
+  double rz = dot(r, z, work.partial);
+  double residual = std::sqrt(rr0) / rhs_norm;
   // With float products the recursive residual r drifts from b - A x (each product is off by up
   // to 2^-24 an entry), and CG would converge on the rounded matrix, to about 1e-7 of |b| on
   // the double one. Residual replacement (the "reliable updates" of Sleijpen & van der Vorst
@@ -307,7 +306,6 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
                               std::sqrt(rr) < kReplacementDrop * last_true_norm)) {
       rr = true_residual(exact_view, rhs, x, q, r, z, inverse_diagonal, work.partial, rz_next);
       last_true_norm = std::sqrt(rr);
-      ++work.replacements;
     }
     if (!inverse_diagonal) {
       precondition(r, z);

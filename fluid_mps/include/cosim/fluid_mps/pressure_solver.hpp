@@ -71,7 +71,6 @@ struct CgWork {
   std::vector<std::uint16_t> short_column;
   bool single_precision = false;  // the CG products read float copies of the values
   std::vector<float> single_value;
-  long replacements = 0;  // true residuals taken with float products (all solves so far)
 };
 
 // A pressure solver that keeps its work arrays (and the AMG library objects) between solves, so
