@@ -10,6 +10,21 @@
 
 namespace {
 
+// Settings for side-by-side runs of one binary: COSIM_BENCH_MULTIGRID_RADIUS (the amg
+// hierarchy's radius / l0), COSIM_BENCH_SINGLE_PRODUCT and COSIM_BENCH_UPPER_TRIANGLE (0 or 1:
+// the CG products' float values, the upper-triangle product).
+void apply_environment(cosim::mps::MpsParameters& p) {
+  if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
+    p.multigrid_radius_over_l0 = std::atof(radius);
+  }
+  if (const char* single = std::getenv("COSIM_BENCH_SINGLE_PRODUCT")) {
+    p.single_precision_product = std::atoi(single) != 0;
+  }
+  if (const char* upper = std::getenv("COSIM_BENCH_UPPER_TRIANGLE")) {
+    p.upper_triangle_product = std::atoi(upper) != 0;
+  }
+}
+
 void BM_DamBreakStep(benchmark::State& state) {
   using namespace cosim::mps;
   const double a = 0.05715;
@@ -18,9 +33,7 @@ void BM_DamBreakStep(benchmark::State& state) {
   p.particle_spacing = a / cells_per_width;
   p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
   p.pressure_preconditioner = static_cast<MpsParameters::PressurePreconditioner>(state.range(1));
-  if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
-    p.multigrid_radius_over_l0 = std::atof(radius);  // for sweeps of the hierarchy radius
-  }
+  apply_environment(p);
   FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
   // Skip the start-up so the column is collapsing (typical PCG work) when timing begins.
   while (system.time() < 0.05) system.step(system.stable_dt());
@@ -66,12 +79,7 @@ void BM_Column3dStep(benchmark::State& state) {
   p.particle_spacing = a / static_cast<double>(state.range(0));
   p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
   p.pressure_preconditioner = static_cast<MpsParameters::PressurePreconditioner>(state.range(1));
-  if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
-    p.multigrid_radius_over_l0 = std::atof(radius);  // for sweeps of the hierarchy radius
-  }
-  if (const char* single = std::getenv("COSIM_BENCH_SINGLE_PRODUCT")) {
-    p.single_precision_product = std::atoi(single) != 0;  // float values in the CG products
-  }
+  apply_environment(p);
   FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
   while (system.time() < 0.03) system.step(system.stable_dt());
   long pcg_iterations = 0, steps = 0, searches = 0, unknowns = 0;

@@ -4,7 +4,8 @@
 // particle's position, velocity and pressure after the run (and of the number densities of the
 // particles that are not dummies). Built against two commits and run with OMP_NUM_THREADS=1 and 2,
 // equal lines mean equal bits. Also printed, to compare runs that do not keep the bits (argument
-// --single-product: the float CG product): the surge front (largest fluid x), the water height at
+// --single-product: the float CG product; --full-rows: the CG product over the full rows instead
+// of the upper triangle): the surge front (largest fluid x), the water height at
 // the back wall (largest fluid height within 2 l0 of the smallest fluid x) and the mean fluid
 // pressure. The 2D open channel (the soluble moving wall under discharge and level control) hashes
 // its boundaries' released volume and measured level as well.
@@ -75,9 +76,18 @@ void report(const char* name, FluidSystem& system, int steps,
       front, height, pressure / std::max(1, fluid));
 }
 
-MpsParameters dam_break_parameters(double l0, double a, int dimension, bool single) {
+// The CG products the command line asks for.
+struct Products {
+  bool single = false, upper_triangle = MpsParameters{}.upper_triangle_product;
+  void apply(MpsParameters& p) const {
+    p.single_precision_product = single;
+    p.upper_triangle_product = upper_triangle;
+  }
+};
+
+MpsParameters dam_break_parameters(double l0, double a, int dimension, const Products& products) {
   MpsParameters p;
-  p.single_precision_product = single;
+  products.apply(p);
   p.dimension = dimension;
   if (dimension == 3) {
     p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
@@ -91,27 +101,37 @@ MpsParameters dam_break_parameters(double l0, double a, int dimension, bool sing
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool single = argc > 1 && std::strcmp(argv[1], "--single-product") == 0;
+  Products products;
+  for (int arg = 1; arg < argc; ++arg) {
+    if (std::strcmp(argv[arg], "--single-product") == 0) {
+      products.single = true;
+    } else if (std::strcmp(argv[arg], "--full-rows") == 0) {
+      products.upper_triangle = false;
+    } else {
+      std::fprintf(stderr, "unknown argument %s (--single-product, --full-rows)\n", argv[arg]);
+      return 2;
+    }
+  }
   const double a = 0.05715;
   using Pre = MpsParameters::PressurePreconditioner;
   const auto name = [](Pre pre) {
     return pre == Pre::amg ? "AMG" : pre == Pre::jacobi ? "Jacobi" : "aggregation";
   };
   for (const Pre pre : {Pre::amg, Pre::jacobi, Pre::aggregation}) {
-    MpsParameters p = dam_break_parameters(a / 40, a, 2, single);
+    MpsParameters p = dam_break_parameters(a / 40, a, 2, products);
     p.pressure_preconditioner = pre;
     FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
     report(("2D dam break a/l0=40 " + std::string(name(pre))).c_str(), system, 150);
   }
   {
-    MpsParameters p = dam_break_parameters(a / 40, a, 2, single);
+    MpsParameters p = dam_break_parameters(a / 40, a, 2, products);
     p.pressure_preconditioner = Pre::jacobi;
     p.source_term = MpsParameters::SourceTerm::mixed;
     FluidSystem system(p, dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
     report("2D dam break 40 mixed", system, 150);
   }
   for (const Pre pre : {Pre::jacobi, Pre::aggregation}) {
-    MpsParameters p = dam_break_parameters(a / 8, a, 3, single);
+    MpsParameters p = dam_break_parameters(a / 8, a, 3, products);
     p.pressure_preconditioner = pre;
     FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
     report(("3D column a/l0=8 " + std::string(name(pre))).c_str(), system, 60);
@@ -119,6 +139,7 @@ int main(int argc, char** argv) {
   using Control = OpenBoundarySettings::Control;
   for (const Control control : {Control::discharge, Control::level}) {
     MpsParameters p;
+    products.apply(p);
     p.particle_spacing = 0.005;
     p.collision_distance_ratio = 1.0;
     OpenBoundarySettings settings;

@@ -118,6 +118,7 @@ void FluidSystem::initialise() {
       break;
   }
   pressure_solver_.set_single_precision_product(p.single_precision_product);
+  pressure_solver_.set_upper_triangle_product(p.upper_triangle_product);
   StepReport unused;
   gather_state();
   update_neighbours(x_, unused, true);

@@ -7,6 +7,7 @@
 
 #include "aggregation_preconditioner.hpp"
 #include "amg_preconditioner.hpp"
+#include "upper_triangle.hpp"
 
 namespace cosim::mps {
 namespace {
@@ -256,12 +257,54 @@ double true_residual(const RowView& m, const std::vector<double>& rhs, const std
       [&](int i) { return rhs[i] - q[i]; });
 }
 
+// The products of one solve: the full rows (`rows`, float values with single precision) or,
+// with `upper`, the upper triangle built from them; `exact` gives the true residuals with the
+// double values (the initial one, and those of residual replacement).
+struct SolveProducts {
+  RowView rows, exact;
+  UpperTriangle* upper = nullptr;
+
+  SolveProducts(const SparseRows& matrix, CgWork& work, UpperTriangle* upper_triangle) {
+    upper = upper_triangle;
+    const bool single = work.single_precision;
+    if (upper) upper->build(matrix, single);
+    // The full rows are still read for the true residuals when the triangle holds floats.
+    if (!upper || single) {
+      rows = row_view(matrix, work.short_column, single && !upper ? &work.single_value : nullptr);
+      exact = rows;
+      exact.single_value = nullptr;
+    }
+  }
+
+  // q = A p with the products of the iterations; returns p . q.
+  double multiply_dot(const std::vector<double>& p, std::vector<double>& q,
+                      std::vector<double>& partial) const {
+    if (upper) return upper->multiply(p.data(), q.data(), partial);
+    return ::cosim::mps::multiply_dot(rows, p, q, partial);
+  }
+
+  // r = b - A x with the double values (q overwritten; z, r . r, r . z as residual_pass()).
+  double true_residual(const CgWork& work, const std::vector<double>& rhs,
+                       const std::vector<double>& x, std::vector<double>& q, std::vector<double>& r,
+                       std::vector<double>& z, const std::vector<double>* inverse_diagonal,
+                       std::vector<double>& partial, double& rz) const {
+    if (upper && !work.single_precision) {
+      upper->multiply(x.data(), q.data(), partial);
+      return residual_pass(
+          r, z, inverse_diagonal, partial, rz, [](int, int) {},
+          [&](int i) { return rhs[i] - q[i]; });
+    }
+    return ::cosim::mps::true_residual(exact, rhs, x, q, r, z, inverse_diagonal, partial, rz);
+  }
+};
+
 // Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r,
 // or with `inverse_diagonal` the Jacobi step is fused into the residual update.
 template <class Precondition>
 PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double>& rhs,
                               std::vector<double>& x, double tolerance, int max_iterations,
-                              CgWork& work, const std::vector<double>* inverse_diagonal,
+                              CgWork& work, UpperTriangle* upper,
+                              const std::vector<double>* inverse_diagonal,
                               Precondition&& precondition) {
   const int n = matrix.rows();
   std::vector<double>&r = work.r, &z = work.z, &p = work.p, &q = work.q;
@@ -277,12 +320,10 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
   q.resize(n);
   // The initial residual is taken with the double matrix; with single values only the products
   // of the iterations use the rounded matrix (a relative change of at most 2^-24 an entry).
-  const RowView view =
-      row_view(matrix, work.short_column, work.single_precision ? &work.single_value : nullptr);
-  RowView exact_view = view;  // the double values, for the true residuals below
-  exact_view.single_value = nullptr;
+  const SolveProducts products(matrix, work, upper);
   double unused_rz = 0.0;
-  const double rr0 = true_residual(exact_view, rhs, x, q, r, z, nullptr, work.partial, unused_rz);
+  const double rr0 =
+      products.true_residual(work, rhs, x, q, r, z, nullptr, work.partial, unused_rz);
   precondition(r, z);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) p[i] = z[i];
@@ -297,14 +338,14 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
   double last_true_norm = residual * rhs_norm;
   int iteration = 0;
   while (residual > tolerance && iteration < max_iterations) {
-    const double pq = multiply_dot(view, p, q, work.partial);
+    const double pq = products.multiply_dot(p, q, work.partial);
     if (!(pq > 0.0)) break;  // loss of positive definiteness or breakdown
     const double alpha = rz / pq;
     double rz_next = 0.0;
     double rr = update_residual(alpha, p, q, x, r, z, inverse_diagonal, work.partial, rz_next);
-    if (view.single_value && (std::sqrt(rr) <= tolerance * rhs_norm ||
-                              std::sqrt(rr) < kReplacementDrop * last_true_norm)) {
-      rr = true_residual(exact_view, rhs, x, q, r, z, inverse_diagonal, work.partial, rz_next);
+    if (work.single_precision && (std::sqrt(rr) <= tolerance * rhs_norm ||
+                                  std::sqrt(rr) < kReplacementDrop * last_true_norm)) {
+      rr = products.true_residual(work, rhs, x, q, r, z, inverse_diagonal, work.partial, rz_next);
       last_true_norm = std::sqrt(rr);
     }
     if (!inverse_diagonal) {
@@ -340,6 +381,12 @@ PressureSolver::~PressureSolver() = default;
 PressureSolver::PressureSolver(PressureSolver&&) noexcept = default;
 PressureSolver& PressureSolver::operator=(PressureSolver&&) noexcept = default;
 
+UpperTriangle* PressureSolver::upper() {
+  if (!upper_triangle_) return nullptr;
+  if (!upper_) upper_ = std::make_unique<UpperTriangle>();
+  return upper_.get();
+}
+
 PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<double>& rhs,
                                 std::vector<double>& x, double tolerance, int max_iterations,
                                 const SparseRows* hierarchy_matrix) {
@@ -357,7 +404,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
   if (chosen == Preconditioner::aggregation) {
     if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
     aggregation_->two_level.setup(matrix);
-    return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, nullptr,
+    return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
                                [&](const std::vector<double>& r, std::vector<double>& z) {
                                  aggregation_->two_level.apply(r, z);
                                });
@@ -366,12 +413,13 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
     if (!amg_) amg_ = std::make_unique<Amg>();
     amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
     return conjugate_gradients(
-        matrix, rhs, x, tolerance, max_iterations, work_, nullptr,
+        matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
         [&](const std::vector<double>& r, std::vector<double>& z) { amg_->cycle.apply(r, z); });
   }
   invert_diagonal(matrix, inverse_diagonal_);
   const std::vector<double>& inverse_diagonal = inverse_diagonal_;
-  return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, &inverse_diagonal,
+  return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(),
+                             &inverse_diagonal,
                              [&](const std::vector<double>& r, std::vector<double>& z) {
                                const int size = static_cast<int>(r.size());
                                z.resize(size);

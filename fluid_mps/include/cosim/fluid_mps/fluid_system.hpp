@@ -97,6 +97,9 @@ class FluidSystem {
   // pressure Poisson equation with free-surface Dirichlet condition, pressure correction.
   // Throws StabilityError on NaN, escaped particle or runaway speed.
   StepReport step(double dt);
+  // The pressure equation of the last step, rows in the internal particle order (for checks:
+  // its CG products read the upper triangle only when upper_triangle_product is on).
+  const SparseRows& pressure_matrix() const { return matrix_; }
 
   // Ensemble average of fluid particle velocities within `radius` of each point (seed 000: the
   // surrounding velocity of a plant particle, r_ev = 2 d_veg). water_fraction: fluid particles

@@ -73,6 +73,8 @@ struct CgWork {
   std::vector<float> single_value;
 };
 
+class UpperTriangle;  // upper_triangle.hpp (fluid_mps/src)
+
 // A pressure solver that keeps its work arrays (and the AMG library objects) between solves, so
 // a time step allocates nothing once the particle count has settled.
 class PressureSolver {
@@ -96,6 +98,12 @@ class PressureSolver {
   // gains only on large 3D systems (docs/performance.md, single-precision product).
   void set_single_precision_product(bool on) { work_.single_precision = on; }
   bool single_precision_product() const { return work_.single_precision; }
+  // The products of the CG read the upper triangle only (each pair a_ij = a_ji once, half the
+  // bytes; the matrix must be symmetric in its values), summed in fixed row blocks so the
+  // result does not depend on the thread count; another order of the additions than the full
+  // rows', so other bits (upper_triangle.hpp, docs/performance.md).
+  void set_upper_triangle_product(bool on) { upper_triangle_ = on; }
+  bool upper_triangle_product() const { return upper_triangle_; }
   // The preconditioner a system of `rows` unknowns gets (automatic resolved).
   Preconditioner preconditioner_for(int rows) const {
     if (preconditioner_ != Preconditioner::automatic) return preconditioner_;
@@ -106,13 +114,16 @@ class PressureSolver {
   bool uses_amg(int rows) const { return preconditioner_for(rows) == Preconditioner::amg; }
 
  private:
-  struct Amg;          // hypre objects; the header includes no hypre or MPI header
-  struct Aggregation;  // the two-level preconditioner (Eigen's sparse Cholesky inside)
+  struct Amg;              // hypre objects; the header includes no hypre or MPI header
+  struct Aggregation;      // the two-level preconditioner (Eigen's sparse Cholesky inside)
+  UpperTriangle* upper();  // the triangle's storage when its product is on, else null
   Preconditioner preconditioner_;
   int aggregation_from_unknowns_;
   std::unique_ptr<Amg> amg_;
   std::unique_ptr<Aggregation> aggregation_;
   CgWork work_;
+  bool upper_triangle_ = false;
+  std::unique_ptr<UpperTriangle> upper_;
   std::vector<double> inverse_diagonal_;
 };
 
