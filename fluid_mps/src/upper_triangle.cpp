@@ -32,8 +32,8 @@ void UpperTriangle::build(const SparseRows& m, bool single_value) {
     for (int i = begin; i < end; ++i) {
       std::int64_t near = 0, far = 0;
       for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-        const int j = m.column[k];
-        if (j == i || m.value[k] == 0.0) continue;
+        const int j = m.column[k];  // only the columns are read here
+        if (j == i) continue;
         if (j > i && near_pair(i, j)) {
           ++near;
           window_end = std::max(window_end, j + 1);
@@ -81,8 +81,6 @@ void UpperTriangle::fill(const SparseRows& m, std::vector<Value>& near_value,
       const double v = m.value[k];
       if (j == i) {
         diagonal += v;
-      } else if (v == 0.0) {
-        continue;
       } else if (j > i && near_pair(i, j)) {
         near_column_[near] = static_cast<std::uint16_t>(j - first);
         near_value[near++] = static_cast<Value>(v);

@@ -27,8 +27,8 @@ class UpperTriangle {
   static constexpr int kBlock = 1024;
   static constexpr int kNearBlocks = 7;  // windows of up to 8 blocks: 16-bit offsets
 
-  // From the rows of a symmetric matrix (entries in any order, repeated columns allowed, zeros
-  // skipped; the diagonal is the sum of a row's entries in its own column). With
+  // From the rows of a symmetric matrix (entries in any order, repeated columns allowed; the
+  // diagonal is the sum of a row's entries in its own column, where padding zeros go). With
   // `single_value`, the off-diagonal values are kept rounded to float (the diagonal stays double).
   void build(const SparseRows& m, bool single_value = false);
   // y = A x (y sized by the caller); returns x . y summed per block, the blocks in order.
