@@ -11,8 +11,8 @@
 namespace {
 
 // Settings for side-by-side runs of one binary: COSIM_BENCH_MULTIGRID_RADIUS (the amg
-// hierarchy's radius / l0), COSIM_BENCH_SINGLE_PRODUCT and COSIM_BENCH_UPPER_TRIANGLE (0 or 1:
-// the CG products' float values, the upper-triangle product).
+// hierarchy's radius / l0), COSIM_BENCH_SINGLE_PRODUCT (0 or 1: the CG products' float values)
+// and COSIM_BENCH_UPPER_TRIANGLE (0: full rows, 1: upper triangle; unset: automatic).
 void apply_environment(cosim::mps::MpsParameters& p) {
   if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
     p.multigrid_radius_over_l0 = std::atof(radius);
@@ -21,7 +21,9 @@ void apply_environment(cosim::mps::MpsParameters& p) {
     p.single_precision_product = std::atoi(single) != 0;
   }
   if (const char* upper = std::getenv("COSIM_BENCH_UPPER_TRIANGLE")) {
-    p.upper_triangle_product = std::atoi(upper) != 0;
+    p.pressure_product = std::atoi(upper) != 0
+                             ? cosim::mps::MpsParameters::PressureProduct::upper_triangle
+                             : cosim::mps::MpsParameters::PressureProduct::full_rows;
   }
 }
 

@@ -4,11 +4,11 @@
 // particle's position, velocity and pressure after the run (and of the number densities of the
 // particles that are not dummies). Built against two commits and run with OMP_NUM_THREADS=1 and 2,
 // equal lines mean equal bits. Also printed, to compare runs that do not keep the bits (argument
-// --single-product: the float CG product; --full-rows: the CG product over the full rows instead
-// of the upper triangle): the surge front (largest fluid x), the water height at
-// the back wall (largest fluid height within 2 l0 of the smallest fluid x) and the mean fluid
-// pressure. The 2D open channel (the soluble moving wall under discharge and level control) hashes
-// its boundaries' released volume and measured level as well.
+// --single-product: the float CG product; --full-rows or --upper-triangle: that CG product in
+// every case instead of the automatic choice, upper triangle in 3D): the surge front (largest fluid
+// x), the water height at the back wall (largest fluid height within 2 l0 of the smallest fluid x)
+// and the mean fluid pressure. The 2D open channel (the soluble moving wall under discharge and
+// level control) hashes its boundaries' released volume and measured level as well.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -78,10 +78,11 @@ void report(const char* name, FluidSystem& system, int steps,
 
 // The CG products the command line asks for.
 struct Products {
-  bool single = false, upper_triangle = MpsParameters{}.upper_triangle_product;
+  bool single = false;
+  MpsParameters::PressureProduct product = MpsParameters::PressureProduct::automatic;
   void apply(MpsParameters& p) const {
     p.single_precision_product = single;
-    p.upper_triangle_product = upper_triangle;
+    p.pressure_product = product;
   }
 };
 
@@ -106,9 +107,13 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[arg], "--single-product") == 0) {
       products.single = true;
     } else if (std::strcmp(argv[arg], "--full-rows") == 0) {
-      products.upper_triangle = false;
+      products.product = MpsParameters::PressureProduct::full_rows;
+    } else if (std::strcmp(argv[arg], "--upper-triangle") == 0) {
+      products.product = MpsParameters::PressureProduct::upper_triangle;
     } else {
-      std::fprintf(stderr, "unknown argument %s (--single-product, --full-rows)\n", argv[arg]);
+      std::fprintf(stderr,
+                   "unknown argument %s (--single-product, --full-rows, --upper-triangle)\n",
+                   argv[arg]);
       return 2;
     }
   }

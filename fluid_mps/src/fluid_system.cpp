@@ -118,7 +118,10 @@ void FluidSystem::initialise() {
       break;
   }
   pressure_solver_.set_single_precision_product(p.single_precision_product);
-  pressure_solver_.set_upper_triangle_product(p.upper_triangle_product);
+  using Product = MpsParameters::PressureProduct;
+  pressure_solver_.set_upper_triangle_product(
+      p.pressure_product == Product::upper_triangle ||
+      (p.pressure_product == Product::automatic && p.dimension == 3));
   StepReport unused;
   gather_state();
   update_neighbours(x_, unused, true);

@@ -248,3 +248,35 @@ TEST(MpsUpperTriangle, AssembledPressureMatricesAreSymmetric) {
     EXPECT_EQ(asymmetric, 0) << "of " << entries.size() << " pairs";
   }
 }
+
+// pressure_product: automatic takes the upper triangle in 3D and the full rows in 2D: its runs
+// have the bits of the explicit choice, and the other choice gives other bits.
+TEST(MpsUpperTriangle, AutomaticProductIsTheUpperTriangleIn3DOnly) {
+  using Product = MpsParameters::PressureProduct;
+  const double a = 0.05715;
+  for (const int dimension : {2, 3}) {
+    SCOPED_TRACE(dimension);
+    auto run = [&](Product product) {
+      MpsParameters p;
+      p.dimension = dimension;
+      p.pressure_product = product;
+      if (dimension == 3) {
+        p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
+        p.radius_laplacian_over_l0 = 3.1;
+      }
+      p.particle_spacing = a / (dimension == 3 ? 6 : 20);
+      p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
+      FluidSystem system(p, dimension == 3 ? dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a)
+                                           : dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
+      for (int step = 0; step < 15; ++step) system.step(system.stable_dt());
+      return system.pressures();
+    };
+    const std::vector<double> automatic = run(Product::automatic);
+    const std::vector<double> chosen =
+        run(dimension == 3 ? Product::upper_triangle : Product::full_rows);
+    const std::vector<double> other =
+        run(dimension == 3 ? Product::full_rows : Product::upper_triangle);
+    EXPECT_TRUE(same_bits(automatic, chosen));
+    EXPECT_FALSE(same_bits(automatic, other));
+  }
+}

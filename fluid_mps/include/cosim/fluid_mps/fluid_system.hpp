@@ -98,7 +98,7 @@ class FluidSystem {
   // Throws StabilityError on NaN, escaped particle or runaway speed.
   StepReport step(double dt);
   // The pressure equation of the last step, rows in the internal particle order (for checks:
-  // its CG products read the upper triangle only when upper_triangle_product is on).
+  // its CG products read the upper triangle only with MpsParameters::pressure_product).
   const SparseRows& pressure_matrix() const { return matrix_; }
 
   // Ensemble average of fluid particle velocities within `radius` of each point (seed 000: the

@@ -115,12 +115,15 @@ struct MpsParameters {
   // (a matrix perturbed by at most 2^-24 relative an entry); off by default
   // (docs/performance.md: its cost and its effect on the validation figures).
   bool single_precision_product = false;
-  // The products of the CG read the matrix's upper triangle only: each pair once, half the
-  // bytes (pressure_solver.hpp). Another order of the same additions than the full rows'
-  // product, so other bits; the result still does not depend on the thread count. The product
-  // costs 0.74 of the full rows' in 2D (a/l0 = 80) and the 3D step 0.82 at 38 k particles
-  // (docs/performance.md); false gives the full rows' bits of earlier versions.
-  bool upper_triangle_product = true;
+  // What the CG products read (pressure_solver.hpp): upper_triangle reads each pair of the
+  // symmetric matrix once (half the bytes; the result still does not depend on the thread
+  // count, but it is another order of the same additions, so other bits than full_rows). It
+  // pays where the product is bound by reading the matrix: the 3D step at 38 k particles took
+  // 0.82 of full_rows' time on one thread and 0.97 on two; a 2D step (14 k unknowns) 0.9 on one
+  // thread but 1.10 on two (docs/performance.md). automatic: upper_triangle in 3D, full_rows in
+  // 2D (a choice from the scene alone, so runs and restarts stay bit-identical).
+  enum class PressureProduct { automatic, full_rows, upper_triangle };
+  PressureProduct pressure_product = PressureProduct::automatic;
   // amg: radius [l0] of the Laplacian model the multigrid hierarchy is built from (capped at the
   // Laplacian radius). Shorter than radius_laplacian_over_l0 makes the set-up and the cycles
   // cheaper for a few more iterations; 2.5 was the fastest of 2.1 / 2.5 / 3.0 / 4.0 measured at
@@ -266,6 +269,10 @@ inline constexpr scenario::Choices<MpsParameters::PressurePreconditioner, 5> kPr
      {"jacobi", MpsParameters::PressurePreconditioner::jacobi},
      {"incomplete_cholesky", MpsParameters::PressurePreconditioner::incomplete_cholesky},
      {"aggregation", MpsParameters::PressurePreconditioner::aggregation}}};
+inline constexpr scenario::Choices<MpsParameters::PressureProduct, 3> kPressureProducts{
+    {{"automatic", MpsParameters::PressureProduct::automatic},
+     {"full_rows", MpsParameters::PressureProduct::full_rows},
+     {"upper_triangle", MpsParameters::PressureProduct::upper_triangle}}};
 inline constexpr scenario::Choices<MpsParameters::SourceTerm, 2> kSourceTerms{
     {{"mixed", MpsParameters::SourceTerm::mixed}, {"density", MpsParameters::SourceTerm::density}}};
 inline constexpr scenario::Choices<MpsParameters::PressureBackground, 2> kPressureBackgrounds{
@@ -343,9 +350,9 @@ void visit_parameters(P& p, V& v) {
     p.pressure_preconditioner, kPreconditioners);
   v(Key("single_precision_product").doc("CG products read float matrix values (changes the bits)"),
     p.single_precision_product);
-  v(Key("upper_triangle_product")
-        .doc("CG products read each matrix pair once (false: the full rows)"),
-    p.upper_triangle_product);
+  v(Key("pressure_product")
+        .doc("CG products: automatic (3D: upper_triangle), full_rows, upper_triangle"),
+    p.pressure_product, kPressureProducts);
   v(Key("multigrid_radius_over_l0").in(radius).doc("radius of the amg hierarchy's Laplacian / l0"),
     p.multigrid_radius_over_l0);
   v(Key("compressibility").unit("1/Pa").in(Range::non_negative()).doc("artificial compressibility"),
