@@ -58,6 +58,21 @@ SparseRows kernel_laplacian(const NeighbourList& list, std::size_t particles, do
   return a;
 }
 
+// The MPS Laplacian of a cubic lattice of side `count` (spacing 1) with radius `radius`, the
+// particles of the outer `ring` layers held at p = 0 (no unknowns of their own).
+inline SparseRows boundary_lattice_laplacian(int count, double radius, int ring) {
+  const auto points = lattice(3, count, 1.0);
+  NeighbourGrid grid(3, box_of(points, 1.0), radius);
+  grid.build(points);
+  const NeighbourList list = grid.neighbours(points, radius);
+  auto inside = [&](int i) {
+    const int x = i % count, y = (i / count) % count, z = i / (count * count);
+    return std::min({x, y, z}) >= ring && std::max({x, y, z}) < count - ring;
+  };
+  std::vector<int> row_of;
+  return kernel_laplacian(list, points.size(), radius, inside, row_of);
+}
+
 // A right-hand side that varies from row to row (not an eigenvector of a lattice Laplacian).
 inline std::vector<double> varying_rhs(int rows) {
   std::vector<double> b(rows);

@@ -352,17 +352,8 @@ TEST(MpsPressureSolver, MatrixProductHasTheBitsOfThePlainRowLoop) {
 // its solution is that of the double product to the tolerance.
 TEST(MpsPressureSolver, SinglePrecisionProductConvergesToTheDoubleSolution) {
   const double radius = 3.1;
-  const int count = 22;  // 18^3 unknowns inside 2 boundary layers
-  const auto points = lattice(3, count, 1.0);
-  NeighbourGrid grid(3, box_of(points, 1.0), radius);
-  grid.build(points);
-  const NeighbourList list = grid.neighbours(points, radius);
-  auto inside = [&](int i) {
-    const int x = i % count, y = (i / count) % count, z = i / (count * count);
-    return std::min({x, y, z}) >= 2 && std::max({x, y, z}) < count - 2;
-  };
-  std::vector<int> row_of;
-  const SparseRows a = kernel_laplacian(list, points.size(), radius, inside, row_of);
+  // 18^3 unknowns inside 2 boundary layers
+  const SparseRows a = boundary_lattice_laplacian(22, radius, 2);
   const int rows = a.rows();
   const std::vector<double> b = varying_rhs(rows);
   for (const Preconditioner preconditioner :

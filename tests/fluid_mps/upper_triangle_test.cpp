@@ -101,6 +101,25 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
+// A 2D or 3D dam break (the benchmarks' column, coarse) after `steps` steps with the CG product
+// `product`.
+FluidSystem stepped_dam_break(int dimension, MpsParameters::PressureProduct product, int steps) {
+  const double a = 0.05715;
+  MpsParameters p;
+  p.dimension = dimension;
+  p.pressure_product = product;
+  if (dimension == 3) {
+    p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
+    p.radius_laplacian_over_l0 = 3.1;
+  }
+  p.particle_spacing = a / (dimension == 3 ? 6 : 20);
+  p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
+  FluidSystem system(p, dimension == 3 ? dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a)
+                                       : dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
+  for (int step = 0; step < steps; ++step) system.step(system.stable_dt());
+  return system;
+}
+
 }  // namespace
 
 // Every row equals the full rows' sum to round-off of its terms, x . y is the sum of its rows,
@@ -162,17 +181,8 @@ TEST(MpsUpperTriangle, BitsDoNotDependOnTheThreadCount) {
 // not depend on the thread count.
 TEST(MpsUpperTriangle, ConjugateGradientsSolveAsWithTheFullRows) {
   const double radius = 3.1;
-  const int count = 26;  // 22^3 = 10 648 unknowns: 11 blocks
-  const auto points = lattice(3, count, 1.0);
-  NeighbourGrid grid(3, box_of(points, 1.0), radius);
-  grid.build(points);
-  const NeighbourList list = grid.neighbours(points, radius);
-  auto inside = [&](int i) {
-    const int x = i % count, y = (i / count) % count, z = i / (count * count);
-    return std::min({x, y, z}) >= 2 && std::max({x, y, z}) < count - 2;
-  };
-  std::vector<int> row_of;
-  const SparseRows a = kernel_laplacian(list, points.size(), radius, inside, row_of);
+  // 22^3 = 10 648 unknowns: 11 blocks
+  const SparseRows a = boundary_lattice_laplacian(26, radius, 2);
   const int rows = a.rows();
   const std::vector<double> b = varying_rhs(rows);
   for (const Preconditioner preconditioner :
@@ -216,20 +226,10 @@ TEST(MpsUpperTriangle, ConjugateGradientsSolveAsWithTheFullRows) {
 // their values, bit for bit (a_ij and a_ji come from w(r_ij) of the same distance), so the
 // triangle's product is that of the matrix the step assembled.
 TEST(MpsUpperTriangle, AssembledPressureMatricesAreSymmetric) {
-  const double a = 0.05715;
   for (const int dimension : {2, 3}) {
     SCOPED_TRACE(dimension);
-    MpsParameters p;
-    p.dimension = dimension;
-    if (dimension == 3) {
-      p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
-      p.radius_laplacian_over_l0 = 3.1;
-    }
-    p.particle_spacing = a / (dimension == 3 ? 6 : 20);
-    p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
-    FluidSystem system(p, dimension == 3 ? dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a)
-                                         : dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
-    for (int step = 0; step < 20; ++step) system.step(system.stable_dt());
+    const FluidSystem system =
+        stepped_dam_break(dimension, MpsParameters::PressureProduct::automatic, 20);
     const SparseRows& m = system.pressure_matrix();
     ASSERT_GT(m.rows(), 100);
     std::map<std::pair<int, int>, double> entries;
@@ -253,23 +253,10 @@ TEST(MpsUpperTriangle, AssembledPressureMatricesAreSymmetric) {
 // have the bits of the explicit choice, and the other choice gives other bits.
 TEST(MpsUpperTriangle, AutomaticProductIsTheUpperTriangleIn3DOnly) {
   using Product = MpsParameters::PressureProduct;
-  const double a = 0.05715;
   for (const int dimension : {2, 3}) {
     SCOPED_TRACE(dimension);
     auto run = [&](Product product) {
-      MpsParameters p;
-      p.dimension = dimension;
-      p.pressure_product = product;
-      if (dimension == 3) {
-        p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
-        p.radius_laplacian_over_l0 = 3.1;
-      }
-      p.particle_spacing = a / (dimension == 3 ? 6 : 20);
-      p.max_dt = 0.25 * p.particle_spacing / std::sqrt(9.81 * 2.0 * a);
-      FluidSystem system(p, dimension == 3 ? dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a)
-                                           : dam_break(p, a, 2.0 * a, 8.0 * a, 3.0 * a));
-      for (int step = 0; step < 15; ++step) system.step(system.stable_dt());
-      return system.pressures();
+      return stepped_dam_break(dimension, product, 15).pressures();
     };
     const std::vector<double> automatic = run(Product::automatic);
     const std::vector<double> chosen =
