@@ -258,8 +258,8 @@ double true_residual(const RowView& m, const std::vector<double>& rhs, const std
 }
 
 // The products of one solve: the full rows (`rows`, float values with single precision) or,
-// with `upper`, the upper triangle built from them; `exact` gives the true residuals with the
-// double values (the initial one, and those of residual replacement).
+// with `upper`, the upper triangle built from them (float values too with single precision);
+// true residuals (the initial one, and those of residual replacement) read the double values.
 struct SolveProducts {
   RowView rows, exact;
   UpperTriangle* upper = nullptr;
@@ -267,13 +267,13 @@ struct SolveProducts {
   SolveProducts(const SparseRows& matrix, CgWork& work, UpperTriangle* upper_triangle) {
     upper = upper_triangle;
     const bool single = work.single_precision;
-    if (upper) upper->build(matrix, single);
-    // The full rows are still read for the true residuals when the triangle holds floats.
-    if (!upper || single) {
-      rows = row_view(matrix, work.short_column, single && !upper ? &work.single_value : nullptr);
-      exact = rows;
-      exact.single_value = nullptr;
+    if (upper) {
+      upper->build(matrix, single);  // with floats for the iterations, doubles for the rest
+      return;
     }
+    rows = row_view(matrix, work.short_column, single ? &work.single_value : nullptr);
+    exact = rows;
+    exact.single_value = nullptr;
   }
 
   // q = A p with the products of the iterations; returns p . q.
@@ -284,12 +284,12 @@ struct SolveProducts {
   }
 
   // r = b - A x with the double values (q overwritten; z, r . r, r . z as residual_pass()).
-  double true_residual(const CgWork& work, const std::vector<double>& rhs,
-                       const std::vector<double>& x, std::vector<double>& q, std::vector<double>& r,
-                       std::vector<double>& z, const std::vector<double>* inverse_diagonal,
-                       std::vector<double>& partial, double& rz) const {
-    if (upper && !work.single_precision) {
-      upper->multiply(x.data(), q.data(), partial);
+  double true_residual(const std::vector<double>& rhs, const std::vector<double>& x,
+                       std::vector<double>& q, std::vector<double>& r, std::vector<double>& z,
+                       const std::vector<double>* inverse_diagonal, std::vector<double>& partial,
+                       double& rz) const {
+    if (upper) {
+      upper->multiply(x.data(), q.data(), partial, true);
       return residual_pass(
           r, z, inverse_diagonal, partial, rz, [](int, int) {},
           [&](int i) { return rhs[i] - q[i]; });
@@ -322,8 +322,7 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
   // of the iterations use the rounded matrix (a relative change of at most 2^-24 an entry).
   const SolveProducts products(matrix, work, upper);
   double unused_rz = 0.0;
-  const double rr0 =
-      products.true_residual(work, rhs, x, q, r, z, nullptr, work.partial, unused_rz);
+  const double rr0 = products.true_residual(rhs, x, q, r, z, nullptr, work.partial, unused_rz);
   precondition(r, z);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) p[i] = z[i];
@@ -345,7 +344,7 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
     double rr = update_residual(alpha, p, q, x, r, z, inverse_diagonal, work.partial, rz_next);
     if (work.single_precision && (std::sqrt(rr) <= tolerance * rhs_norm ||
                                   std::sqrt(rr) < kReplacementDrop * last_true_norm)) {
-      rr = products.true_residual(work, rhs, x, q, r, z, inverse_diagonal, work.partial, rz_next);
+      rr = products.true_residual(rhs, x, q, r, z, inverse_diagonal, work.partial, rz_next);
       last_true_norm = std::sqrt(rr);
     }
     if (!inverse_diagonal) {

@@ -58,19 +58,25 @@ void UpperTriangle::build(const SparseRows& m, bool single_value) {
   window_.resize(window_start_[blocks]);
   near_column_.resize(near_offset_[n]);
   far_column_.resize(far_offset_[n]);
-  if (single_) {
-    fill(m, near_single_, far_single_);
-  } else {
-    fill(m, near_value_, far_value_);
-  }
+  fill(m);
+  if (!single_) return;
+  // The float copies the iterations read; the double values stay for the true residuals.
+  near_single_.resize(near_value_.size());
+  far_single_.resize(far_value_.size());
+  const std::int64_t near = near_offset_[n], far = far_offset_[n];
+#pragma omp parallel for schedule(static) if (near >= 65536)
+  for (std::int64_t k = 0; k < near; ++k) near_single_[k] = static_cast<float>(near_value_[k]);
+  for (std::int64_t k = 0; k < far; ++k) far_single_[k] = static_cast<float>(far_value_[k]);
 }
 
-template <class Value>
-void UpperTriangle::fill(const SparseRows& m, std::vector<Value>& near_value,
-                         std::vector<Value>& far_value) {
+void UpperTriangle::fill(const SparseRows& m) {
   const int n = rows_;
-  near_value.resize(near_offset_[n]);
-  far_value.resize(far_offset_[n]);
+  double* near_value = nullptr;
+  double* far_value = nullptr;
+  near_value_.resize(near_offset_[n]);
+  far_value_.resize(far_offset_[n]);
+  near_value = near_value_.data();
+  far_value = far_value_.data();
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     const int first = block_of(i) * kBlock;
@@ -83,10 +89,10 @@ void UpperTriangle::fill(const SparseRows& m, std::vector<Value>& near_value,
         diagonal += v;
       } else if (j > i && near_pair(i, j)) {
         near_column_[near] = static_cast<std::uint16_t>(j - first);
-        near_value[near++] = static_cast<Value>(v);
+        near_value[near++] = v;
       } else if (j > i ? !near_pair(i, j) : !near_pair(j, i)) {
         far_column_[far] = j;
-        far_value[far++] = static_cast<Value>(v);
+        far_value[far++] = v;
       }
     }
     diagonal_[i] = diagonal;
@@ -156,12 +162,13 @@ void UpperTriangle::sum_windows(const double* x, double* y, std::vector<double>&
   }
 }
 
-double UpperTriangle::multiply(const double* x, double* y, std::vector<double>& partial) {
+double UpperTriangle::multiply(const double* x, double* y, std::vector<double>& partial,
+                               bool exact) {
   const int blocks = static_cast<int>(window_end_.size());
   partial.resize(blocks);
 #pragma omp parallel if (blocks >= 4)
   {
-    if (single_) {
+    if (single_ && !exact) {
       accumulate_windows(near_single_.data(), far_single_.data(), x);
     } else {
       accumulate_windows(near_value_.data(), far_value_.data(), x);

@@ -29,18 +29,18 @@ class UpperTriangle {
 
   // From the rows of a symmetric matrix (entries in any order, repeated columns allowed; the
   // diagonal is the sum of a row's entries in its own column, where padding zeros go). With
-  // `single_value`, the off-diagonal values are kept rounded to float (the diagonal stays double).
+  // `single_value`, the off-diagonal values are also kept rounded to float for multiply().
   void build(const SparseRows& m, bool single_value = false);
-  // y = A x (y sized by the caller); returns x . y summed per block, the blocks in order.
-  double multiply(const double* x, double* y, std::vector<double>& partial);
+  // y = A x (y sized by the caller); returns x . y summed per block, the blocks in order. Reads
+  // the float values when built with them, unless `exact` (the double values).
+  double multiply(const double* x, double* y, std::vector<double>& partial, bool exact = false);
 
   int rows() const { return rows_; }
   std::int64_t near_entries() const { return near_offset_.empty() ? 0 : near_offset_.back(); }
   std::int64_t far_entries() const { return far_offset_.empty() ? 0 : far_offset_.back(); }
 
  private:
-  template <class Value>
-  void fill(const SparseRows& m, std::vector<Value>& near_value, std::vector<Value>& far_value);
+  void fill(const SparseRows& m);
   template <class Value>
   void accumulate_windows(const Value* near_value, const Value* far_value, const double* x);
   void sum_windows(const double* x, double* y, std::vector<double>& partial);
