@@ -71,12 +71,10 @@ void UpperTriangle::build(const SparseRows& m, bool single_value) {
 
 void UpperTriangle::fill(const SparseRows& m) {
   const int n = rows_;
-  double* near_value = nullptr;
-  double* far_value = nullptr;
   near_value_.resize(near_offset_[n]);
   far_value_.resize(far_offset_[n]);
-  near_value = near_value_.data();
-  far_value = far_value_.data();
+  double* near_value = near_value_.data();
+  double* far_value = far_value_.data();
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     const int first = block_of(i) * kBlock;
