@@ -12,7 +12,8 @@
 namespace cosim::mps {
 namespace {
 
-constexpr int kBlock = 1024;
+// Rows per block of the dot products; the upper triangle's windows use the same blocks.
+constexpr int kBlock = UpperTriangle::kBlock;
 
 // With float products, the factor by which |r| falls between two true residuals (see
 // conjugate_gradients): three or four double products in a solve to 1e-8.

@@ -9,9 +9,16 @@ int block_of(int row) {
   return row / UpperTriangle::kBlock;
 }
 
-// Whether the pair (row, column), column > row, is kept once (see UpperTriangle).
-bool near_pair(int row, int column) {
-  return block_of(column) - block_of(row) <= UpperTriangle::kNearBlocks;
+// Where the entry (row, column) of a row goes (see UpperTriangle): the diagonal; a near pair,
+// kept once in its upper row; a far pair, kept in both rows; or nowhere (a near pair's lower
+// entry).
+enum class Entry { diagonal, near, far, lower_near };
+
+Entry entry_kind(int row, int column) {
+  if (column == row) return Entry::diagonal;
+  const int upper = std::max(row, column), lower = std::min(row, column);
+  if (block_of(upper) - block_of(lower) > UpperTriangle::kNearBlocks) return Entry::far;
+  return column > row ? Entry::near : Entry::lower_near;
 }
 
 }  // namespace
@@ -33,11 +40,11 @@ void UpperTriangle::build(const SparseRows& m, bool single_value) {
       std::int64_t near = 0, far = 0;
       for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
         const int j = m.column[k];  // only the columns are read here
-        if (j == i) continue;
-        if (j > i && near_pair(i, j)) {
+        const Entry kind = entry_kind(i, j);
+        if (kind == Entry::near) {
           ++near;
           window_end = std::max(window_end, j + 1);
-        } else if ((j > i ? !near_pair(i, j) : !near_pair(j, i))) {
+        } else if (kind == Entry::far) {
           ++far;
         }
       }
@@ -83,14 +90,20 @@ void UpperTriangle::fill(const SparseRows& m) {
     for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
       const int j = m.column[k];
       const double v = m.value[k];
-      if (j == i) {
-        diagonal += v;
-      } else if (j > i && near_pair(i, j)) {
-        near_column_[near] = static_cast<std::uint16_t>(j - first);
-        near_value[near++] = v;
-      } else if (j > i ? !near_pair(i, j) : !near_pair(j, i)) {
-        far_column_[far] = j;
-        far_value[far++] = v;
+      switch (entry_kind(i, j)) {
+        case Entry::diagonal:
+          diagonal += v;
+          break;
+        case Entry::near:
+          near_column_[near] = static_cast<std::uint16_t>(j - first);
+          near_value[near++] = v;
+          break;
+        case Entry::far:
+          far_column_[far] = j;
+          far_value[far++] = v;
+          break;
+        case Entry::lower_near:
+          break;
       }
     }
     diagonal_[i] = diagonal;
