@@ -80,6 +80,19 @@ inline std::vector<double> varying_rhs(int rows) {
   return b;
 }
 
+// |b - A x| / |b| (the true relative residual of x).
+inline double relative_residual(const SparseRows& a, const std::vector<double>& b,
+                                const std::vector<double>& x) {
+  std::vector<double> ax;
+  multiply(a, x, ax);
+  double residual2 = 0.0, b2 = 0.0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    residual2 += (b[i] - ax[i]) * (b[i] - ax[i]);
+    b2 += b[i] * b[i];
+  }
+  return std::sqrt(residual2 / b2);
+}
+
 // The largest |x_i - y_i|; `largest` gets the largest |y_i| (the scale to compare it with).
 inline double largest_difference(const std::vector<double>& x, const std::vector<double>& y,
                                  double& largest) {
