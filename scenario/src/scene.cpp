@@ -279,6 +279,9 @@ void apply_override(YAML::Node& document, const std::string& dotted_key, const s
   if (const int index = list_index(chain.back(), keys.back()); index >= 0) {
     chain.back()[index] = parsed;
   } else {
+    // The key is written anew, so it has no line in the file: an error about it then says it
+    // came from the command line instead of pointing at the file's line with the old value.
+    chain.back().remove(keys.back());
     chain.back()[keys.back()] = parsed;
   }
 }

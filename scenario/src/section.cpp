@@ -51,8 +51,14 @@ int Section::line_of(const std::string& key) const {
 }
 
 void Section::fail(const std::string& key, const std::string& problem) const {
-  throw ScenarioError(fmt::format("{}:{}: key '{}': {}", source_->file.string(), line_of(key),
-                                  dotted(key), problem));
+  // A key written by an override (--set, --perturb, a sweep's --vary) has no line in the file.
+  const int line = line_of(key);
+  if (line <= 0) {
+    throw ScenarioError(fmt::format("{}: key '{}' (set on the command line): {}",
+                                    source_->file.string(), dotted(key), problem));
+  }
+  throw ScenarioError(
+      fmt::format("{}:{}: key '{}': {}", source_->file.string(), line, dotted(key), problem));
 }
 
 bool Section::has(const std::string& key) const {

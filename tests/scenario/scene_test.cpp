@@ -93,6 +93,35 @@ TEST(Scene, ErrorsNameFileLineAndKey) {
   EXPECT_NE(choice.find("serial-explicit"), std::string::npos) << "lists the choices: " << choice;
 }
 
+// A value from the command line (--set, --perturb, --vary) has no line in the file: the error
+// says where it came from instead of pointing at line 0.
+TEST(Scene, AnOverriddenKeysErrorSaysItCameFromTheCommandLine) {
+  const auto folder = write("override", kScene);
+  YAML::Node document = load_yaml_file(folder / "scenario.yaml");
+  apply_override(document, "participants.vegetation_beam.stiffness", "-3");
+  std::string error;
+  try {
+    load_scene(document, folder / "scenario.yaml", parsers());
+  } catch (const ScenarioError& caught) {
+    error = caught.what();
+  }
+  EXPECT_NE(error.find("scenario.yaml: key 'participants.vegetation_beam.stiffness' (set on the "
+                       "command line)"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(error.find(":0:"), std::string::npos) << error;
+  // An override that adds a key of its own, unknown to the participant, says the same.
+  YAML::Node added = load_yaml_file(folder / "scenario.yaml");
+  apply_override(added, "participants.vegetation_beam.links", "1000");
+  try {
+    load_scene(added, folder / "scenario.yaml", parsers());
+    ADD_FAILURE() << "links = 1000 is out of range";
+  } catch (const ScenarioError& caught) {
+    EXPECT_NE(std::string(caught.what()).find("(set on the command line)"), std::string::npos)
+        << caught.what();
+  }
+}
+
 TEST(Scene, YamlSyntaxErrorsNameTheLine) {
   const std::string error = error_of("name: x\nduration: [1\n");
   EXPECT_NE(error.find("scenario.yaml"), std::string::npos) << error;

@@ -133,5 +133,42 @@ TEST(Sweep, WithoutMatplotlibStopsBeforeRunningAnything) {
   EXPECT_EQ(table.output.find("figure written to"), std::string::npos) << table.output;
 }
 
+// cosim spread: the bundle and one run per perturbation, then each metric's range over them.
+TEST(Spread, RunsTheBundleAndEachPerturbationAndTabulatesTheRange) {
+  const auto runs = fresh_folder("spread");
+  const auto result = run_cosim(fmt::format(
+      "spread {} --perturb coupling.window=5e-4 --perturb "
+      "participants.vegetation_beam.safety_factor=0.4 --runs-dir {} --quiet "
+      "--record none",
+      blade(), runs.string()));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("spread 1/3: bundle"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("spread 2/3: window=5e-4"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("spread 3/3: safety_factor=0.4"), std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("spread over 3 runs (the bundle and 2 perturbations)"),
+            std::string::npos)
+      << result.output;
+  EXPECT_EQ(folders_in(runs), 3u) << "one run folder each";
+  std::smatch csv;
+  ASSERT_TRUE(std::regex_search(result.output, csv, std::regex("table written to (\\S+\\.csv)")))
+      << result.output;
+  std::ifstream in(csv[1].str());
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("perturbation,ok,wall_seconds,metric", 0), 0u) << header;
+  // A perturbation that is not KEY=VALUE, or out of range, stops before anything runs.
+  const auto bad = run_cosim(
+      fmt::format("spread {} --perturb coupling.window --runs-dir {}", blade(), runs.string()));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--perturb expects KEY=VALUE"), std::string::npos) << bad.output;
+  const auto range = run_cosim(fmt::format(
+      "spread {} --perturb participants.vegetation_beam.safety_factor=-1 --runs-dir {}", blade(),
+      runs.string()));
+  EXPECT_EQ(range.exit_code, 2) << range.output;
+  EXPECT_NE(range.output.find("(set on the command line)"), std::string::npos) << range.output;
+  EXPECT_EQ(folders_in(runs), 3u) << "no run was started";
+}
+
 }  // namespace
 }  // namespace cosim::testing

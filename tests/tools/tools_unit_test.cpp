@@ -123,6 +123,33 @@ TEST(SweepFigure, WithoutReferencesShowsEachValueAgainstWallTime) {
   EXPECT_EQ(figure["panels"][0]["lines"][0]["y"], (nlohmann::json{0.5}));
 }
 
+// --- spread ------------------------------------------------------------------------------
+
+TEST(MetricSpreads, RangeOfEachMetricOverTheRunsFromTheBase) {
+  auto base = row("bundle", 1.0, 0.10);
+  auto tighter = row("pcg_tolerance=1e-9", 1.1, 0.12);
+  auto longer = row("courant=0.19", 1.2, 0.07);
+  longer.metrics[1].second["value"] = 5.0;        // a metric without a reference
+  tighter.metrics.pop_back();                     // one run did not report it
+  tighter.metrics.emplace_back("fluid.extra", nlohmann::json{{"value", 9.0}});  // not in the base
+  const auto spreads = tool::metric_spreads({base, tighter, longer});
+  ASSERT_EQ(spreads.size(), 2u) << "the base run's metrics, in its order";
+  EXPECT_EQ(spreads[0].name, "fluid.front");
+  EXPECT_EQ(spreads[0].unit, "m");
+  EXPECT_EQ(spreads[0].runs, 3);
+  EXPECT_TRUE(spreads[0].has_error);
+  EXPECT_DOUBLE_EQ(spreads[0].base_error, 0.10);
+  EXPECT_DOUBLE_EQ(spreads[0].min_error, 0.07);
+  EXPECT_DOUBLE_EQ(spreads[0].max_error, 0.12);
+  EXPECT_EQ(spreads[1].name, "fluid.count");
+  EXPECT_EQ(spreads[1].runs, 2);
+  EXPECT_FALSE(spreads[1].has_error);
+  EXPECT_DOUBLE_EQ(spreads[1].base_value, 3.0);
+  EXPECT_DOUBLE_EQ(spreads[1].min_value, 3.0);
+  EXPECT_DOUBLE_EQ(spreads[1].max_value, 5.0);
+  EXPECT_TRUE(tool::metric_spreads({}).empty());
+}
+
 // --- cosim plot ---------------------------------------------------------------------------
 
 // A run folder as `cosim run` leaves it, with one participant's series.

@@ -164,6 +164,20 @@ int main(int argc, char** argv) {
   sweep_command->add_flag("--no-plot", no_plot,
                           "no error-vs-run-time figure (PNG beside the CSV, needs matplotlib)");
 
+  tool::SpreadRequest spread;
+  auto* spread_command = app.add_subcommand(
+      "spread",
+      "run a scene as it is and once per perturbation that changes nothing physical; tabulate "
+      "how far each metric moves by itself");
+  spread_command->add_option("bundle", spread.bundle, "scenario folder")->required();
+  spread_command
+      ->add_option("--perturb", spread.perturbations,
+                   "KEY=VALUE, one run each: e.g. participants.fluid_mps.pcg_tolerance=1e-9, "
+                   "participants.fluid_mps.courant=0.19")
+      ->required();
+  add_run_options(spread_command);
+  add_overrides(spread_command);
+
   std::filesystem::path plot_dir;
   auto* plot_command = app.add_subcommand(
       "plot", "draw each metric's time series against its reference, as PNGs in the run folder");
@@ -261,6 +275,12 @@ int main(int argc, char** argv) {
       sweep.plot = !no_plot;
       if (!ensure_network(network, argc, argv)) return 2;
       return tool::sweep(sweep);
+    }
+    if (spread_command->parsed()) {
+      spread.overrides = overrides;
+      spread.run = request;
+      if (!ensure_network(network, argc, argv)) return 2;
+      return tool::spread(spread);
     }
     if (replay_command->parsed()) {
       if (!ensure_network(network, argc, argv)) return 2;

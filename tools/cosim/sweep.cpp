@@ -3,6 +3,7 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -99,35 +100,53 @@ nlohmann::json sweep_figure(const std::string& scene, const std::string& vary,
   return figure;
 }
 
-int sweep(const SweepRequest& request) {
-  // Before any run: a sweep may take hours, and its figure needs matplotlib.
-  if (request.plot) plotting_python();
-  const auto file = scenario_file_of(request.bundle);
+namespace {
+
+// One run of a sweep or a spread: its label in the tables and its overrides.
+struct Variant {
+  std::string label;
+  std::vector<std::string> overrides;
+};
+
+struct VariantRuns {
+  std::vector<SweepRow> rows;
+  std::string scene;
+  int exit_code = 0;  // 1 when a run failed; an interrupted run's code, which stops them all
+  bool interrupted = false;
+};
+
+// Every variant is checked before any runs: a sweep may take hours.
+VariantRuns run_variants(const std::filesystem::path& bundle,
+                         const std::vector<std::string>& overrides,
+                         const std::vector<Variant>& variants, const RunRequest& request,
+                         const std::string& command) {
+  const auto file = scenario_file_of(bundle);
   const YAML::Node original = scenario::load_yaml_file(file);
-  // Check every variant before running any.
   std::vector<scenario::Scene> scenes;
-  for (const auto& value : request.values) {
+  for (const auto& variant : variants) {
     YAML::Node document = YAML::Clone(original);
-    apply_all(document, request.overrides);
-    scenario::apply_override(document, request.vary, value);
+    apply_all(document, overrides);
+    apply_all(document, variant.overrides);
     scenes.push_back(scenario::load_scene(document, file, participant_parsers()));
-    check_run_request(scenes.back(), request.run);  // a bad --fault stops the sweep at once
+    check_run_request(scenes.back(), request);  // a bad --fault stops them at once
   }
-  using Row = SweepRow;
-  std::vector<Row> rows;
-  int exit_code = 0;
+  VariantRuns result;
+  result.scene = scenes.front().name;
   for (std::size_t i = 0; i < scenes.size(); ++i) {
-    fmt::print("sweep {}/{}: {} = {}\n", i + 1, scenes.size(), request.vary, request.values[i]);
+    fmt::print("{} {}/{}: {}\n", command, i + 1, scenes.size(), variants[i].label);
     std::fflush(stdout);  // before the run's progress lines on stderr
-    RunRequest run = request.run;
-    run.run_label = fmt::format("sweep{}", i + 1);
+    RunRequest run = request;
+    run.run_label = fmt::format("{}{}", command, i + 1);
     const auto outcome = run_scene(scenes[i], run);
     if (outcome.interrupted_by != 0) {
-      // Ctrl-C stops the sweep, not only the run that was going.
+      // Ctrl-C stops them all, not only the run that was going.
       fmt::print(stderr, "{}\n", interruption_line(outcome));
-      return outcome.exit_code;
+      result.exit_code = outcome.exit_code;
+      result.interrupted = true;
+      return result;
     }
-    Row row{request.values[i], outcome.result.ok, outcome.result.wall_seconds, {}, outcome.run_dir};
+    SweepRow row{variants[i].label, outcome.result.ok, outcome.result.wall_seconds, {},
+                 outcome.run_dir};
     std::ifstream in(outcome.run_dir / "summary.json");
     const auto summary = nlohmann::json::parse(in);
     for (const auto& participant : summary["participants"]) {
@@ -138,27 +157,36 @@ int sweep(const SweepRequest& request) {
       }
     }
     if (!outcome.result.ok) {
-      exit_code = 1;
+      result.exit_code = 1;
       fmt::print("  failed: {}\n", outcome.result.failure);
     }
-    rows.push_back(std::move(row));
+    result.rows.push_back(std::move(row));
   }
+  return result;
+}
 
-  // Table and CSV: one line per run and metric.
+// Table and CSV: one line per run and metric. Returns the CSV's path.
+std::filesystem::path write_table(const VariantRuns& runs, const std::string& command,
+                                  const std::string& column, const std::string& column_title,
+                                  const std::filesystem::path& runs_dir) {
   const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::filesystem::create_directories(request.run.runs_dir);
+  std::filesystem::create_directories(runs_dir);
   const auto csv_path = std::filesystem::absolute(
-      request.run.runs_dir /
-      fmt::format("{}-sweep-{:%Y%m%d-%H%M%S}.csv", scenes.front().name, fmt::localtime(now)));
+      runs_dir / fmt::format("{}-{}-{:%Y%m%d-%H%M%S}.csv", runs.scene, command, fmt::localtime(now)));
   std::ofstream csv(csv_path);
-  csv << request.vary << ",ok,wall_seconds,metric,value,unit,reference,relative_error,run_dir\n";
-  fmt::print("\n{:<14} {:>9}  {:<44} {:>12} {:>12} {:>9}\n",
-             request.vary.substr(request.vary.rfind('.') + 1), "wall [s]", "metric", "value",
-             "reference", "error %");
-  for (const auto& row : rows) {
+  csv << column << ",ok,wall_seconds,metric,value,unit,reference,relative_error,run_dir\n";
+  std::size_t width = std::max<std::size_t>(14, column_title.size());
+  for (const auto& row : runs.rows) width = std::max(width, row.value.size());
+  fmt::print("\n{:<{}} {:>9}  {:<44} {:>12} {:>12} {:>9}\n", column_title, width, "wall [s]",
+             "metric", "value", "reference", "error %");
+  for (const auto& row : runs.rows) {
+    // A label with a comma is quoted in the CSV.
+    const std::string label =
+        row.value.find(',') == std::string::npos ? row.value : "\"" + row.value + "\"";
     if (row.metrics.empty()) {
-      fmt::print("{:<14} {:>9.2f}  {}\n", row.value, row.wall, row.ok ? "(no metrics)" : "FAILED");
-      csv << fmt::format("{},{},{},,,,,,{}\n", row.value, row.ok, row.wall, row.run_dir.string());
+      fmt::print("{:<{}} {:>9.2f}  {}\n", row.value, width, row.wall,
+                 row.ok ? "(no metrics)" : "FAILED");
+      csv << fmt::format("{},{},{},,,,,,{}\n", label, row.ok, row.wall, row.run_dir.string());
     }
     for (const auto& [name, metric] : row.metrics) {
       const double value = metric["value"].get<double>();
@@ -168,29 +196,115 @@ int sweep(const SweepRequest& request) {
           has_reference ? fmt::format("{:.6g}", metric["reference"].get<double>()) : "";
       const std::string error =
           has_error ? fmt::format("{:.3f}", 100 * metric["relative_error"].get<double>()) : "";
-      fmt::print("{:<14} {:>9.2f}  {:<44} {:>12.6g} {:>12} {:>9}\n", row.value, row.wall, name,
-                 value, reference, error);
-      csv << fmt::format("{},{},{},{},{},{},{},{},{}\n", row.value, row.ok, row.wall, name, value,
+      fmt::print("{:<{}} {:>9.2f}  {:<44} {:>12.6g} {:>12} {:>9}\n", row.value, width, row.wall,
+                 name, value, reference, error);
+      csv << fmt::format("{},{},{},{},{},{},{},{},{}\n", label, row.ok, row.wall, name, value,
                          metric.value("unit", ""), reference,
                          has_error ? fmt::format("{}", metric["relative_error"].get<double>()) : "",
                          row.run_dir.string());
     }
   }
-  csv.close();
   fmt::print("\ntable written to {}\n", csv_path.string());
+  return csv_path;
+}
+
+}  // namespace
+
+int sweep(const SweepRequest& request) {
+  // Before any run: a sweep may take hours, and its figure needs matplotlib.
+  if (request.plot) plotting_python();
+  std::vector<Variant> variants;
+  for (const auto& value : request.values) {
+    variants.push_back({value, {request.vary + "=" + value}});
+  }
+  // The values are labels; --vary's key applies them (an '=' in a value is part of it).
+  const auto runs = run_variants(request.bundle, request.overrides, variants, request.run, "sweep");
+  if (runs.interrupted) return runs.exit_code;
+  const auto csv_path =
+      write_table(runs, "sweep", request.vary, request.vary.substr(request.vary.rfind('.') + 1),
+                  request.run.runs_dir);
   if (request.plot) {
     auto png_path = csv_path;
     png_path.replace_extension(".png");
     try {
-      draw_figures(
-          {{"figures", {sweep_figure(scenes.front().name, request.vary, rows, png_path)}}});
+      draw_figures({{"figures", {sweep_figure(runs.scene, request.vary, runs.rows, png_path)}}});
       fmt::print("figure written to {}\n", png_path.string());
     } catch (const PlotError& error) {
       fmt::print(stderr, "error: no figure ({}); the table is complete\n", error.what());
-      return exit_code != 0 ? exit_code : 2;
+      return runs.exit_code != 0 ? runs.exit_code : 2;
     }
   }
-  return exit_code;
+  return runs.exit_code;
+}
+
+std::vector<MetricSpread> metric_spreads(const std::vector<SweepRow>& rows) {
+  std::vector<MetricSpread> spreads;
+  if (rows.empty()) return spreads;
+  const auto number = [](const nlohmann::json& metric, const char* key, double& out) {
+    if (!metric.contains(key) || !metric[key].is_number()) return false;
+    out = metric[key].get<double>();
+    return true;
+  };
+  for (const auto& [name, metric] : rows.front().metrics) {
+    MetricSpread spread;
+    spread.name = name;
+    spread.unit = metric.value("unit", "");
+    if (!number(metric, "value", spread.base_value)) continue;
+    spread.has_error = number(metric, "relative_error", spread.base_error);
+    spread.min_value = spread.max_value = spread.base_value;
+    spread.min_error = spread.max_error = spread.base_error;
+    for (const auto& row : rows) {
+      for (const auto& [other, entry] : row.metrics) {
+        double value = 0, error = 0;
+        if (other != name || !number(entry, "value", value)) continue;
+        ++spread.runs;
+        spread.min_value = std::min(spread.min_value, value);
+        spread.max_value = std::max(spread.max_value, value);
+        if (spread.has_error && number(entry, "relative_error", error)) {
+          spread.min_error = std::min(spread.min_error, error);
+          spread.max_error = std::max(spread.max_error, error);
+        }
+        break;
+      }
+    }
+    spreads.push_back(spread);
+  }
+  return spreads;
+}
+
+int spread(const SpreadRequest& request) {
+  std::vector<Variant> variants{{"bundle", {}}};
+  for (const auto& perturbation : request.perturbations) {
+    if (perturbation.find('=') == std::string::npos) {
+      throw scenario::ScenarioError("--perturb expects KEY=VALUE, got '" + perturbation + "'");
+    }
+    // Labelled by the key's last part and the value: pcg_tolerance=1e-9.
+    const auto equals = perturbation.find('=');
+    const auto key = perturbation.substr(0, equals);
+    variants.push_back(
+        {key.substr(key.rfind('.') + 1) + perturbation.substr(equals), {perturbation}});
+  }
+  const auto runs =
+      run_variants(request.bundle, request.overrides, variants, request.run, "spread");
+  if (runs.interrupted) return runs.exit_code;
+  write_table(runs, "spread", "perturbation", "perturbation", request.run.runs_dir);
+  fmt::print("\nspread over {} runs (the bundle and {} perturbation{}): the range is how far a "
+             "metric moves by itself\n",
+             runs.rows.size(), runs.rows.size() - 1, runs.rows.size() == 2 ? "" : "s");
+  fmt::print("{:<44} {:>4} {:>12} {:>12} {:>12} {:>9} {:>9} {:>9} {:>9}\n", "metric", "runs",
+             "value", "min", "max", "error %", "min %", "max %", "range");
+  for (const auto& m : metric_spreads(runs.rows)) {
+    if (m.has_error) {
+      fmt::print("{:<44} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>9.3f} {:>9.3f} {:>9.3f} {:>9.3f}\n",
+                 m.name, m.runs, m.base_value, m.min_value, m.max_value, 100 * m.base_error,
+                 100 * m.min_error, 100 * m.max_error, 100 * (m.max_error - m.min_error));
+    } else {
+      fmt::print("{:<44} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>9} {:>9} {:>9} {:>9.3g}\n", m.name,
+                 m.runs, m.base_value, m.min_value, m.max_value, "", "", "",
+                 m.max_value - m.min_value);
+    }
+  }
+  return runs.exit_code;
 }
 
 }  // namespace cosim::tool
