@@ -84,8 +84,11 @@ std::filesystem::path stl_scene(const std::string& name, const std::string& stl)
 void expect_refused(const CommandResult& result, const std::string& key,
                     const std::string& problem) {
   EXPECT_EQ(result.exit_code, 2) << result.output;
-  // file:line: key '...'
-  EXPECT_TRUE(std::regex_search(result.output, std::regex("scenario\\.yaml:[0-9]+: key '" + key)))
+  // file:line: key '...', or for a value given with --set: file: key '...' (set on the command
+  // line)
+  EXPECT_TRUE(std::regex_search(
+      result.output, std::regex("scenario\\.yaml(:[0-9]+: key '" + key + "'|: key '" + key +
+                                "' \\(set on the command line\\))")))
       << result.output << "\nwant key " << key;
   EXPECT_NE(result.output.find(problem), std::string::npos) << result.output;
 }

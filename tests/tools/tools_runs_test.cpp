@@ -136,11 +136,11 @@ TEST(Sweep, WithoutMatplotlibStopsBeforeRunningAnything) {
 // cosim spread: the bundle and one run per perturbation, then each metric's range over them.
 TEST(Spread, RunsTheBundleAndEachPerturbationAndTabulatesTheRange) {
   const auto runs = fresh_folder("spread");
-  const auto result = run_cosim(fmt::format(
-      "spread {} --perturb coupling.window=5e-4 --perturb "
-      "participants.vegetation_beam.safety_factor=0.4 --runs-dir {} --quiet "
-      "--record none",
-      blade(), runs.string()));
+  const auto result =
+      run_cosim(fmt::format("spread {} --perturb coupling.window=5e-4 --perturb "
+                            "participants.vegetation_beam.safety_factor=0.4 --runs-dir {} --quiet "
+                            "--record none",
+                            blade(), runs.string()));
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("spread 1/3: bundle"), std::string::npos) << result.output;
   EXPECT_NE(result.output.find("spread 2/3: window=5e-4"), std::string::npos) << result.output;
@@ -162,9 +162,9 @@ TEST(Spread, RunsTheBundleAndEachPerturbationAndTabulatesTheRange) {
       fmt::format("spread {} --perturb coupling.window --runs-dir {}", blade(), runs.string()));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--perturb expects KEY=VALUE"), std::string::npos) << bad.output;
-  const auto range = run_cosim(fmt::format(
-      "spread {} --perturb participants.vegetation_beam.safety_factor=-1 --runs-dir {}", blade(),
-      runs.string()));
+  const auto range = run_cosim(
+      fmt::format("spread {} --perturb participants.vegetation_beam.safety_factor=-1 --runs-dir {}",
+                  blade(), runs.string()));
   EXPECT_EQ(range.exit_code, 2) << range.output;
   EXPECT_NE(range.output.find("(set on the command line)"), std::string::npos) << range.output;
   EXPECT_EQ(folders_in(runs), 3u) << "no run was started";

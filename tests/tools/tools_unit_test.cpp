@@ -129,8 +129,8 @@ TEST(MetricSpreads, RangeOfEachMetricOverTheRunsFromTheBase) {
   auto base = row("bundle", 1.0, 0.10);
   auto tighter = row("pcg_tolerance=1e-9", 1.1, 0.12);
   auto longer = row("courant=0.19", 1.2, 0.07);
-  longer.metrics[1].second["value"] = 5.0;        // a metric without a reference
-  tighter.metrics.pop_back();                     // one run did not report it
+  longer.metrics[1].second["value"] = 5.0;  // a metric without a reference
+  tighter.metrics.pop_back();               // one run did not report it
   tighter.metrics.emplace_back("fluid.extra", nlohmann::json{{"value", 9.0}});  // not in the base
   const auto spreads = tool::metric_spreads({base, tighter, longer});
   ASSERT_EQ(spreads.size(), 2u) << "the base run's metrics, in its order";

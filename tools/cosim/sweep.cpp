@@ -102,10 +102,11 @@ nlohmann::json sweep_figure(const std::string& scene, const std::string& vary,
 
 namespace {
 
-// One run of a sweep or a spread: its label in the tables and its overrides.
+// One run of a sweep or a spread: its label in the tables, its overrides and its progress line.
 struct Variant {
   std::string label;
   std::vector<std::string> overrides;
+  std::string title;
 };
 
 struct VariantRuns {
@@ -133,7 +134,7 @@ VariantRuns run_variants(const std::filesystem::path& bundle,
   VariantRuns result;
   result.scene = scenes.front().name;
   for (std::size_t i = 0; i < scenes.size(); ++i) {
-    fmt::print("{} {}/{}: {}\n", command, i + 1, scenes.size(), variants[i].label);
+    fmt::print("{} {}/{}: {}\n", command, i + 1, scenes.size(), variants[i].title);
     std::fflush(stdout);  // before the run's progress lines on stderr
     RunRequest run = request;
     run.run_label = fmt::format("{}{}", command, i + 1);
@@ -145,8 +146,8 @@ VariantRuns run_variants(const std::filesystem::path& bundle,
       result.interrupted = true;
       return result;
     }
-    SweepRow row{variants[i].label, outcome.result.ok, outcome.result.wall_seconds, {},
-                 outcome.run_dir};
+    SweepRow row{
+        variants[i].label, outcome.result.ok, outcome.result.wall_seconds, {}, outcome.run_dir};
     std::ifstream in(outcome.run_dir / "summary.json");
     const auto summary = nlohmann::json::parse(in);
     for (const auto& participant : summary["participants"]) {
@@ -171,8 +172,9 @@ std::filesystem::path write_table(const VariantRuns& runs, const std::string& co
                                   const std::filesystem::path& runs_dir) {
   const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::filesystem::create_directories(runs_dir);
-  const auto csv_path = std::filesystem::absolute(
-      runs_dir / fmt::format("{}-{}-{:%Y%m%d-%H%M%S}.csv", runs.scene, command, fmt::localtime(now)));
+  const auto csv_path =
+      std::filesystem::absolute(runs_dir / fmt::format("{}-{}-{:%Y%m%d-%H%M%S}.csv", runs.scene,
+                                                       command, fmt::localtime(now)));
   std::ofstream csv(csv_path);
   csv << column << ",ok,wall_seconds,metric,value,unit,reference,relative_error,run_dir\n";
   std::size_t width = std::max<std::size_t>(14, column_title.size());
@@ -215,7 +217,7 @@ int sweep(const SweepRequest& request) {
   if (request.plot) plotting_python();
   std::vector<Variant> variants;
   for (const auto& value : request.values) {
-    variants.push_back({value, {request.vary + "=" + value}});
+    variants.push_back({value, {request.vary + "=" + value}, request.vary + " = " + value});
   }
   // The values are labels; --vary's key applies them (an '=' in a value is part of it).
   const auto runs = run_variants(request.bundle, request.overrides, variants, request.run, "sweep");
@@ -273,7 +275,7 @@ std::vector<MetricSpread> metric_spreads(const std::vector<SweepRow>& rows) {
 }
 
 int spread(const SpreadRequest& request) {
-  std::vector<Variant> variants{{"bundle", {}}};
+  std::vector<Variant> variants{{"bundle", {}, "bundle"}};
   for (const auto& perturbation : request.perturbations) {
     if (perturbation.find('=') == std::string::npos) {
       throw scenario::ScenarioError("--perturb expects KEY=VALUE, got '" + perturbation + "'");
@@ -281,16 +283,17 @@ int spread(const SpreadRequest& request) {
     // Labelled by the key's last part and the value: pcg_tolerance=1e-9.
     const auto equals = perturbation.find('=');
     const auto key = perturbation.substr(0, equals);
-    variants.push_back(
-        {key.substr(key.rfind('.') + 1) + perturbation.substr(equals), {perturbation}});
+    const std::string label = key.substr(key.rfind('.') + 1) + perturbation.substr(equals);
+    variants.push_back({label, {perturbation}, label});
   }
   const auto runs =
       run_variants(request.bundle, request.overrides, variants, request.run, "spread");
   if (runs.interrupted) return runs.exit_code;
   write_table(runs, "spread", "perturbation", "perturbation", request.run.runs_dir);
-  fmt::print("\nspread over {} runs (the bundle and {} perturbation{}): the range is how far a "
-             "metric moves by itself\n",
-             runs.rows.size(), runs.rows.size() - 1, runs.rows.size() == 2 ? "" : "s");
+  fmt::print(
+      "\nspread over {} runs (the bundle and {} perturbation{}): the range is how far a "
+      "metric moves by itself\n",
+      runs.rows.size(), runs.rows.size() - 1, runs.rows.size() == 2 ? "" : "s");
   fmt::print("{:<44} {:>4} {:>12} {:>12} {:>12} {:>9} {:>9} {:>9} {:>9}\n", "metric", "runs",
              "value", "min", "max", "error %", "min %", "max %", "range");
   for (const auto& m : metric_spreads(runs.rows)) {
