@@ -277,11 +277,11 @@ std::vector<MetricSpread> metric_spreads(const std::vector<SweepRow>& rows) {
 int spread(const SpreadRequest& request) {
   std::vector<Variant> variants{{"bundle", {}, "bundle"}};
   for (const auto& perturbation : request.perturbations) {
-    if (perturbation.find('=') == std::string::npos) {
+    const auto equals = perturbation.find('=');
+    if (equals == std::string::npos) {
       throw scenario::ScenarioError("--perturb expects KEY=VALUE, got '" + perturbation + "'");
     }
     // Labelled by the key's last part and the value: pcg_tolerance=1e-9.
-    const auto equals = perturbation.find('=');
     const auto key = perturbation.substr(0, equals);
     const std::string label = key.substr(key.rfind('.') + 1) + perturbation.substr(equals);
     variants.push_back({label, {perturbation}, label});
@@ -292,7 +292,7 @@ int spread(const SpreadRequest& request) {
   write_table(runs, "spread", "perturbation", "perturbation", request.run.runs_dir);
   fmt::print(
       "\nspread over {} runs (the bundle and {} perturbation{}): the range is how far a "
-      "metric moves by itself\n",
+      "metric moves by itself, in points of its error, or in its unit without a reference\n",
       runs.rows.size(), runs.rows.size() - 1, runs.rows.size() == 2 ? "" : "s");
   fmt::print("{:<44} {:>4} {:>12} {:>12} {:>12} {:>9} {:>9} {:>9} {:>9}\n", "metric", "runs",
              "value", "min", "max", "error %", "min %", "max %", "range");
