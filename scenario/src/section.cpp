@@ -9,6 +9,20 @@
 #include "cosim/scenario/document.hpp"
 
 namespace cosim::scenario {
+namespace {
+
+// "file:line: key 'k': problem"; a key an override wrote (--set, --perturb, a sweep's --vary)
+// has no line in the file (`line` 0, from yaml-cpp's null mark), and the error says so instead.
+ScenarioError key_error(const std::filesystem::path& file, int line, const std::string& key,
+                        const std::string& problem) {
+  if (line <= 0) {
+    return ScenarioError(
+        fmt::format("{}: key '{}' (set on the command line): {}", file.string(), key, problem));
+  }
+  return ScenarioError(fmt::format("{}:{}: key '{}': {}", file.string(), line, key, problem));
+}
+
+}  // namespace
 
 // The checks on the file itself (kind, size, duplicate keys) live in document.cpp.
 YAML::Node load_yaml_file(const std::filesystem::path& file) {
@@ -51,14 +65,7 @@ int Section::line_of(const std::string& key) const {
 }
 
 void Section::fail(const std::string& key, const std::string& problem) const {
-  // A key written by an override (--set, --perturb, a sweep's --vary) has no line in the file.
-  const int line = line_of(key);
-  if (line <= 0) {
-    throw ScenarioError(fmt::format("{}: key '{}' (set on the command line): {}",
-                                    source_->file.string(), dotted(key), problem));
-  }
-  throw ScenarioError(
-      fmt::format("{}:{}: key '{}': {}", source_->file.string(), line, dotted(key), problem));
+  throw key_error(source_->file, line_of(key), dotted(key), problem);
 }
 
 bool Section::has(const std::string& key) const {
@@ -247,9 +254,8 @@ std::vector<Section> Section::list(const std::string& key) {
   YAML::Node resolved_list = resolved_[key];
   for (std::size_t index = 0; index < value.size(); ++index) {
     if (!value[index].IsMap()) {
-      throw ScenarioError(fmt::format("{}:{}: key '{}[{}]': expected a mapping of keys",
-                                      source_->file.string(), value[index].Mark().line + 1,
-                                      dotted(key), index));
+      throw key_error(source_->file, value[index].Mark().line + 1,
+                      fmt::format("{}[{}]", dotted(key), index), "expected a mapping of keys");
     }
     YAML::Node resolved_item(YAML::NodeType::Map);
     resolved_list.push_back(resolved_item);
@@ -267,8 +273,7 @@ void Section::finish() const {
       const std::string key = item.first.as<std::string>();
       if (!record->read_keys.contains(key)) {
         const std::string where = record->path.empty() ? key : record->path + "." + key;
-        throw ScenarioError(fmt::format("{}:{}: key '{}': unknown key", source_->file.string(),
-                                        item.first.Mark().line + 1, where));
+        throw key_error(source_->file, item.first.Mark().line + 1, where, "unknown key");
       }
     }
   }

@@ -110,15 +110,22 @@ TEST(Scene, AnOverriddenKeysErrorSaysItCameFromTheCommandLine) {
             std::string::npos)
       << error;
   EXPECT_EQ(error.find(":0:"), std::string::npos) << error;
-  // An override that adds a key of its own, unknown to the participant, says the same.
-  YAML::Node added = load_yaml_file(folder / "scenario.yaml");
-  apply_override(added, "participants.vegetation_beam.links", "1000");
-  try {
-    load_scene(added, folder / "scenario.yaml", parsers());
-    ADD_FAILURE() << "links = 1000 is out of range";
-  } catch (const ScenarioError& caught) {
-    EXPECT_NE(std::string(caught.what()).find("(set on the command line)"), std::string::npos)
-        << caught.what();
+  // An override that adds a key the file does not have says the same, whether its value is out
+  // of range or the key is unknown to the participant.
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"participants.vegetation_beam.links", "1000"},
+           {"participants.vegetation_beam.colour", "red"}}) {
+    YAML::Node added = load_yaml_file(folder / "scenario.yaml");
+    apply_override(added, key, value);
+    try {
+      load_scene(added, folder / "scenario.yaml", parsers());
+      ADD_FAILURE() << key << " = " << value << " is refused";
+    } catch (const ScenarioError& caught) {
+      const std::string what = caught.what();
+      EXPECT_NE(what.find("key '" + key + "' (set on the command line)"), std::string::npos)
+          << what;
+      EXPECT_EQ(what.find(":0:"), std::string::npos) << what;
+    }
   }
 }
 
