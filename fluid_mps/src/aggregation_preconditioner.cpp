@@ -19,58 +19,55 @@ bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength)
   return factored_;
 }
 
-// Greedy aggregation in row order (Vanek et al. 1996, section 4): a row whose strong neighbours
-// are all free starts an aggregate with them; a row left over joins the aggregate of its
-// strongest strong neighbour; a row with no aggregated strong neighbour starts its own.
+// Aggregation in three passes after Vanek et al. (1996, section 4): (1) greedy in row order, a
+// row whose strong neighbours are all free starts an aggregate with them; (2) a row left over
+// joins the pass-1 aggregate of its strongest strong neighbour; (3) a row still left starts an
+// aggregate of its own. Pass 1 runs on stretches of kAggregationStretch rows, each on its own (a
+// neighbour in another stretch is not a candidate); pass 2 reads only pass 1's result, across
+// the stretches. So the stretches run side by side and the aggregates do not depend on the
+// thread count. The rows are in the particles' cell order: a stretch is a compact piece of the
+// domain, and pass 2 mends its border.
 void AggregationPreconditioner::build_aggregates(const SparseRows& m, double strength) {
   const int n = m.rows();
-  // Every row's threshold first, in parallel (the same values), so that the greedy passes,
-  // which are serial, only compare.
+  const int stretches = (n + kAggregationStretch - 1) / kAggregationStretch;
+  const auto first_row = [&](int s) { return s * kAggregationStretch; };
+  const auto end_row = [&](int s) { return std::min(n, (s + 1) * kAggregationStretch); };
   strong_.resize(n);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    double largest = 0.0;
-    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-      if (m.column[k] != i) largest = std::max(largest, -m.value[k]);
-    }
-    // A row without a negative off-diagonal entry has no strong neighbour.
-    strong_[i] = largest > 0.0 ? strength * largest : std::numeric_limits<double>::infinity();
-  }
-  const auto threshold = [&](int i) { return strong_[i]; };
   aggregate_.assign(n, -1);
-  int count = 0;
-  for (int i = 0; i < n; ++i) {
-    if (aggregate_[i] >= 0) continue;
-    const double strong = threshold(i);
-    bool free = true;
-    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-      const int j = m.column[k];
-      if (j != i && -m.value[k] >= strong && aggregate_[j] >= 0) {
-        free = false;
-        break;
+  joined_.resize(n);
+  first_count_.assign(static_cast<std::size_t>(stretches) + 1, 0);
+  own_count_.assign(static_cast<std::size_t>(stretches) + 1, 0);
+  const bool parallel = n >= 4096;
+#pragma omp parallel if (parallel)
+  {
+#pragma omp for schedule(dynamic)
+    for (int s = 0; s < stretches; ++s) {
+      first_count_[s + 1] = greedy_pass(m, strength, first_row(s), end_row(s));
+    }
+#pragma omp single
+    for (int s = 0; s < stretches; ++s) first_count_[s + 1] += first_count_[s];
+    // Pass 1's numbers to global ones (implicit barrier above).
+#pragma omp for schedule(static)
+    for (int s = 0; s < stretches; ++s) {
+      for (int i = first_row(s); i < end_row(s); ++i) {
+        if (aggregate_[i] >= 0) aggregate_[i] += first_count_[s];
       }
     }
-    if (!free) continue;
-    aggregate_[i] = count;
-    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-      if (m.column[k] != i && -m.value[k] >= strong) aggregate_[m.column[k]] = count;
+#pragma omp for schedule(static)
+    for (int s = 0; s < stretches; ++s) {
+      own_count_[s + 1] = join_pass(m, first_row(s), end_row(s));
     }
-    ++count;
-  }
-  for (int i = 0; i < n; ++i) {
-    if (aggregate_[i] >= 0) continue;
-    const double strong = threshold(i);
-    int best = -1;
-    double best_weight = 0.0;
-    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-      const int j = m.column[k];
-      if (j != i && -m.value[k] >= strong && aggregate_[j] >= 0 && -m.value[k] > best_weight) {
-        best_weight = -m.value[k];
-        best = aggregate_[j];
+#pragma omp single
+    for (int s = 0; s < stretches; ++s) own_count_[s + 1] += own_count_[s];
+#pragma omp for schedule(static)
+    for (int s = 0; s < stretches; ++s) {
+      const int base = first_count_[stretches] + own_count_[s];
+      for (int i = first_row(s); i < end_row(s); ++i) {
+        aggregate_[i] = joined_[i] >= 0 ? joined_[i] : base - 2 - joined_[i];
       }
     }
-    aggregate_[i] = best >= 0 ? best : count++;
   }
+  const int count = first_count_[stretches] + own_count_[stretches];
   aggregate_count_ = count;
   // Members of each aggregate in row order (a counting sort).
   member_offset_.assign(static_cast<std::size_t>(count) + 1, 0);
@@ -79,6 +76,85 @@ void AggregationPreconditioner::build_aggregates(const SparseRows& m, double str
   member_.resize(n);
   member_cursor_.assign(member_offset_.begin(), member_offset_.end() - 1);
   for (int i = 0; i < n; ++i) member_[member_cursor_[aggregate_[i]]++] = i;
+}
+
+// Pass 1 on rows [begin, end), numbering its aggregates from 0; returns their count. Also sets
+// the rows' strength thresholds.
+int AggregationPreconditioner::greedy_pass(const SparseRows& m, double strength, int begin,
+                                           int end) {
+  for (int i = begin; i < end; ++i) {
+    double largest = 0.0;
+    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+      if (m.column[k] != i) largest = std::max(largest, -m.value[k]);
+    }
+    // A row without a negative off-diagonal entry has no strong neighbour.
+    strong_[i] = largest > 0.0 ? strength * largest : std::numeric_limits<double>::infinity();
+  }
+  const auto inside = [&](int j) { return j >= begin && j < end; };
+  int count = 0;
+  for (int i = begin; i < end; ++i) {
+    if (aggregate_[i] >= 0) continue;
+    const double strong = strong_[i];
+    bool free = true;
+    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+      const int j = m.column[k];
+      if (j != i && inside(j) && -m.value[k] >= strong && aggregate_[j] >= 0) {
+        free = false;
+        break;
+      }
+    }
+    if (!free) continue;
+    aggregate_[i] = count;
+    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+      const int j = m.column[k];
+      if (j != i && inside(j) && -m.value[k] >= strong) aggregate_[j] = count;
+    }
+    ++count;
+  }
+  return count;
+}
+
+// Pass 2 for row i: the pass-1 aggregate of its strongest strong neighbour, or -1.
+int AggregationPreconditioner::strongest_aggregate(const SparseRows& m, int i) const {
+  const double strong = strong_[i];
+  int best = -1;
+  double best_weight = 0.0;
+  for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+    const int j = m.column[k];
+    if (j != i && -m.value[k] >= strong && aggregate_[j] >= 0 && -m.value[k] > best_weight) {
+      best_weight = -m.value[k];
+      best = aggregate_[j];
+    }
+  }
+  return best;
+}
+
+// Passes 2 and 3 on rows [begin, end): joined_ gets each row's global aggregate from pass 1 or 2,
+// or -2 - k for the stretch's k-th pass-3 aggregate. In pass 3, in row order, a row still left
+// joins the pass-3 aggregate of its strongest strong neighbour in the stretch, or starts one.
+// Returns the number of pass-3 aggregates.
+int AggregationPreconditioner::join_pass(const SparseRows& m, int begin, int end) {
+  constexpr int kLeft = -1;
+  for (int i = begin; i < end; ++i) {
+    joined_[i] = aggregate_[i] >= 0 ? aggregate_[i] : strongest_aggregate(m, i);
+  }
+  int own = 0;
+  for (int i = begin; i < end; ++i) {
+    if (joined_[i] != kLeft) continue;
+    const double strong = strong_[i];
+    int best = kLeft;
+    double best_weight = 0.0;
+    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
+      const int j = m.column[k];
+      if (j != i && j >= begin && j < end && joined_[j] < kLeft && -m.value[k] >= strong &&
+          -m.value[k] > best_weight) {
+        best_weight = -m.value[k];
+        best = joined_[j];
+      }
+    }
+    joined_[i] = best != kLeft ? best : kLeft - 1 - own++;
+  }
+  return own;
 }
 
 // A_c = P^T A P: coarse column a sums the rows of its members, each entry into the row of its

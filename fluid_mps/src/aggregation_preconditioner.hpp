@@ -25,6 +25,9 @@ namespace cosim::mps {
 // 9 / 9 / 15 and 23 / 23 / 23 iterations with a denser coarse matrix (docs/performance.md).
 inline constexpr double kAggregationStrength = 0.3;
 
+// Rows aggregated together (see build_aggregates): stretches aggregate side by side.
+inline constexpr int kAggregationStretch = 2048;
+
 class AggregationPreconditioner {
  public:
   // Builds the aggregates, the coarse matrix and its Cholesky factor for `matrix`. A neighbour
@@ -37,6 +40,9 @@ class AggregationPreconditioner {
 
  private:
   void build_aggregates(const SparseRows& matrix, double strength);
+  int greedy_pass(const SparseRows& matrix, double strength, int begin, int end);
+  int strongest_aggregate(const SparseRows& matrix, int row) const;
+  int join_pass(const SparseRows& matrix, int begin, int end);
   void build_coarse_matrix(const SparseRows& matrix);
 
   std::vector<double> inverse_diagonal_;
@@ -44,6 +50,8 @@ class AggregationPreconditioner {
   std::vector<int> aggregate_;               // aggregate of each row
   std::vector<int> member_offset_, member_;  // rows of each aggregate, in row order
   std::vector<int> member_cursor_;
+  std::vector<int> joined_;                  // see join_pass
+  std::vector<int> first_count_, own_count_;  // pass-1 and pass-3 aggregates before a stretch
   struct Scratch {                      // one per thread of the coarse assembly
     std::vector<int> touched, slot_of;  // coarse rows seen in the current column, their slots
     std::vector<double> row_sum;
