@@ -11,26 +11,51 @@
 namespace cosim::mps {
 namespace {
 
-// Fluid particles within `radius` of each point, found with one cell grid.
+// Fluid particles within `radius` of each point, each group in index order, found with one cell
+// grid. Only fluid particles within reach of the points' bounding box enter the grid: walls,
+// dummies and the parked pool are never found, and the points (a plant field, a log) usually
+// cover a small part of the domain. A periodic run keeps the whole period (the seam).
 std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
                                            const std::vector<Eigen::Vector3d>& positions,
                                            const std::vector<ParticleKind>& kinds,
                                            const std::vector<Eigen::Vector3d>& points,
                                            double radius) {
   if (!(radius > 0.0)) throw std::invalid_argument("sampling radius must be positive");
+  std::vector<std::vector<int>> result(points.size());
+  if (points.empty()) return result;
   double cell = std::max(radius, 2.0 * p.particle_spacing);
   // Periodic runs: at least three cells per period; query() then reaches over several cells.
   if (p.periodic.enabled) cell = std::min(cell, p.periodic.length() / 3.0);
-  NeighbourGrid grid(p.dimension, bounding_box(positions, p.dimension, cell), cell, p.periodic);
-  grid.build(positions);
-  std::vector<std::vector<int>> result(points.size());
+  Eigen::AlignedBox3d reach(points.front());
+  for (const auto& x : points) reach.extend(x);
+  reach.min().array() -= radius;
+  reach.max().array() += radius;
+  const int n = static_cast<int>(positions.size());
+  std::vector<char> include(n, 0);
+  std::vector<Eigen::Vector3d> kept;
+  for (int i = 0; i < n; ++i) {
+    if (kinds[i] != ParticleKind::fluid) continue;
+    Eigen::Vector3d x = positions[i];
+    if (p.periodic.enabled) x.x() = reach.min().x();  // any x is within reach across the seam
+    if (p.dimension == 2) x.z() = reach.min().z();
+    if (!reach.contains(x)) continue;
+    include[i] = 1;
+    kept.push_back(positions[i]);
+  }
+  if (kept.empty()) return result;
+  NeighbourGrid grid(p.dimension, bounding_box(kept, p.dimension, cell), cell, p.periodic);
+  grid.build(positions, &include);
   const int count = static_cast<int>(points.size());
-#pragma omp parallel for schedule(dynamic, 16) if (count >= 64)
-  for (int q = 0; q < count; ++q) {
+  // One buffer a thread and one allocation a group: the groups' growth by push_back, freed later
+  // by another thread, kept two threads slower than one.
+#pragma omp parallel if (count >= 64)
+  {
     std::vector<int> found;
-    grid.query(positions, points[q], radius, found);
-    for (int j : found) {
-      if (kinds[j] == ParticleKind::fluid) result[q].push_back(j);
+#pragma omp for schedule(dynamic, 16)
+    for (int q = 0; q < count; ++q) {
+      grid.query(positions, points[q], radius, found);
+      std::sort(found.begin(), found.end());
+      result[q].assign(found.begin(), found.end());
     }
   }
   return result;
@@ -40,9 +65,7 @@ std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
 
 std::vector<std::vector<int>> FluidSystem::fluid_particles_near(
     const std::vector<Eigen::Vector3d>& points, double radius) const {
-  auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
-  for (auto& group : groups) std::sort(group.begin(), group.end());
-  return groups;
+  return fluid_within(parameters_, positions_, kinds_, points, radius);
 }
 
 std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(

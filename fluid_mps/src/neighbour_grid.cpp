@@ -205,7 +205,7 @@ void NeighbourGrid::query(const std::vector<Eigen::Vector3d>& positions,
     low[axis] = std::max(0, cell[axis] - reach - extra);
     high[axis] = std::min(cells_[axis] - 1, cell[axis] + reach + extra);
   }
-  std::vector<int> xs;
+  thread_local std::vector<int> xs;  // kept: callers query thousands of points at a time
   x_range(cell.x(), reach, xs);
   const double radius2 = radius * radius;
   visit_cells(xs, low, high, [&](int j) {

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/restart.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
@@ -142,6 +143,52 @@ TEST(MpsFluidSystem, SampleVelocityAveragesFluidAndGivesWaterFraction) {
   EXPECT_LT(fraction[1], 0.95);
   EXPECT_EQ(u[2], Eigen::Vector3d::Zero());  // in the air
   EXPECT_EQ(fraction[2], 0.0);
+}
+
+// The particles near a set of points are exactly the fluid particles within the radius (minimum
+// image across a periodic seam), in index order: walls, dummies and particles out of the
+// points' reach never enter, and a point out of the water finds none.
+TEST(MpsFluidSystem, FluidParticlesNearPointsAreTheFluidWithinTheRadius) {
+  auto brute_force = [](const FluidSystem& system, const Eigen::Vector3d& point, double radius) {
+    std::vector<int> found;
+    for (int i = 0; i < system.particle_count(); ++i) {
+      const Eigen::Vector3d d = system.parameters().periodic.wrap(system.positions()[i] - point);
+      if (system.kinds()[i] == ParticleKind::fluid && d.squaredNorm() < radius * radius) {
+        found.push_back(i);
+      }
+    }
+    return found;
+  };
+  MpsParameters tank = small_parameters();
+  const double l0 = tank.particle_spacing;
+  const FluidSystem still(tank, still_water_tank(tank, 0.2, 0.1, 0.2));
+  // Next to the left wall, on the bed, mid-tank, on the surface, in the air.
+  const std::vector<Eigen::Vector3d> points = {
+      {0.5 * l0, 0.05, 0.0}, {0.1, 0.5 * l0, 0.0}, {0.1, 0.05, 0.0}, {0.15, 0.1, 0.0},
+      {0.1, 0.5, 0.0}};
+  const auto groups = still.fluid_particles_near(points, 2.0 * l0);
+  ASSERT_EQ(groups.size(), points.size());
+  for (std::size_t q = 0; q < points.size(); ++q) {
+    EXPECT_EQ(groups[q], brute_force(still, points[q], 2.0 * l0)) << "point " << q;
+  }
+  EXPECT_FALSE(groups[2].empty());
+  EXPECT_TRUE(groups[4].empty());
+
+  MpsParameters channel = small_parameters();
+  channel.periodic.driving_pressure_drop = 20.0;
+  const FluidSystem periodic(channel, periodic_channel(channel, 0.4, 0.1, 0.00304));
+  const double x_min = periodic.parameters().periodic.x_min;
+  const double x_max = periodic.parameters().periodic.x_max;
+  // On the seam from either side: the group reaches across it.
+  const std::vector<Eigen::Vector3d> seam = {{x_min + 0.5 * l0, 0.05, 0.0},
+                                             {x_max - 0.5 * l0, 0.05, 0.0}};
+  const auto across = periodic.fluid_particles_near(seam, 3.0 * l0);
+  for (std::size_t q = 0; q < seam.size(); ++q) {
+    EXPECT_EQ(across[q], brute_force(periodic, seam[q], 3.0 * l0)) << "seam point " << q;
+    bool wrapped = false;
+    for (int i : across[q]) wrapped |= std::abs(periodic.positions()[i].x() - seam[q].x()) > 0.2;
+    EXPECT_TRUE(wrapped) << "seam point " << q << " finds particles across the seam";
+  }
 }
 
 // Two fluid particles approaching closer than d_c: the collision model keeps momentum and
