@@ -22,16 +22,19 @@ bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength)
 // Aggregation in three passes after Vanek et al. (1996, section 4): (1) greedy in row order, a
 // row whose strong neighbours are all free starts an aggregate with them; (2) a row left over
 // joins the pass-1 aggregate of its strongest strong neighbour; (3) a row still left starts an
-// aggregate of its own. Pass 1 runs on stretches of kAggregationStretch rows, each on its own (a
-// neighbour in another stretch is not a candidate); pass 2 reads only pass 1's result, across
-// the stretches. So the stretches run side by side and the aggregates do not depend on the
-// thread count. The rows are in the particles' cell order: a stretch is a compact piece of the
-// domain, and pass 2 mends its border.
+// aggregate of its own. Pass 1 runs on kAggregationStretches equal stretches of the rows, each on
+// its own (a neighbour in another stretch is not a candidate); pass 2 reads only pass 1's result,
+// across the stretches. So the stretches run side by side and the aggregates do not depend on
+// the thread count. The rows are in the particles' cell order: a stretch is a compact piece of
+// the domain, and pass 2 mends its border. More stretches cut more aggregates at their borders:
+// stretches of 2 048 rows gave 10 % more aggregates and a 20 % denser coarse factor.
 void AggregationPreconditioner::build_aggregates(const SparseRows& m, double strength) {
   const int n = m.rows();
-  const int stretches = (n + kAggregationStretch - 1) / kAggregationStretch;
-  const auto first_row = [&](int s) { return s * kAggregationStretch; };
-  const auto end_row = [&](int s) { return std::min(n, (s + 1) * kAggregationStretch); };
+  const int stretches = n >= kAggregationSplitRows ? kAggregationStretches : 1;
+  const auto first_row = [&](int s) {
+    return static_cast<int>(static_cast<std::int64_t>(n) * s / stretches);
+  };
+  const auto end_row = [&](int s) { return first_row(s + 1); };
   strong_.resize(n);
   aggregate_.assign(n, -1);
   joined_.resize(n);

@@ -25,8 +25,10 @@ namespace cosim::mps {
 // 9 / 9 / 15 and 23 / 23 / 23 iterations with a denser coarse matrix (docs/performance.md).
 inline constexpr double kAggregationStrength = 0.3;
 
-// Rows aggregated together (see build_aggregates): stretches aggregate side by side.
-inline constexpr int kAggregationStretch = 2048;
+// From kAggregationSplitRows rows on, the first pass of the aggregation runs on
+// kAggregationStretches equal stretches of rows side by side (see build_aggregates).
+inline constexpr int kAggregationSplitRows = 4096;
+inline constexpr int kAggregationStretches = 2;
 
 class AggregationPreconditioner {
  public:
