@@ -48,8 +48,10 @@ void AggregationPreconditioner::build_aggregates(const SparseRows& m, double str
       first_count_[s + 1] = greedy_pass(m, strength, first_row(s), end_row(s));
     }
 #pragma omp single
-    for (int s = 0; s < stretches; ++s) first_count_[s + 1] += first_count_[s];
-    // Pass 1's numbers to global ones (implicit barrier above).
+    {
+      for (int s = 0; s < stretches; ++s) first_count_[s + 1] += first_count_[s];
+    }
+    // Pass 1's numbers to global ones (after the barrier that ends the single).
 #pragma omp for schedule(static)
     for (int s = 0; s < stretches; ++s) {
       for (int i = first_row(s); i < end_row(s); ++i) {

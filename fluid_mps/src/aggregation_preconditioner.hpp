@@ -52,10 +52,10 @@ class AggregationPreconditioner {
   std::vector<int> aggregate_;               // aggregate of each row
   std::vector<int> member_offset_, member_;  // rows of each aggregate, in row order
   std::vector<int> member_cursor_;
-  std::vector<int> joined_;                  // see join_pass
+  std::vector<int> joined_;                   // see join_pass
   std::vector<int> first_count_, own_count_;  // pass-1 and pass-3 aggregates before a stretch
-  struct Scratch {                      // one per thread of the coarse assembly
-    std::vector<int> touched, slot_of;  // coarse rows seen in the current column, their slots
+  struct Scratch {                            // one per thread of the coarse assembly
+    std::vector<int> touched, slot_of;        // coarse rows seen in the current column, their slots
     std::vector<double> row_sum;
     std::vector<Eigen::Triplet<double>> lower;
   };

@@ -21,7 +21,10 @@ const Eigen::Vector3d kZero = Eigen::Vector3d::Zero();
 
 template <class T>
 void fill(std::vector<T>& v, std::size_t n, const T& value) {
-  v.assign(n, value);  // no allocation once the capacity is there
+  v.resize(n);  // no allocation once the capacity is there
+  const std::int64_t size = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static) if (size >= 4096)
+  for (std::int64_t i = 0; i < size; ++i) v[i] = value;
 }
 
 // visit(j, r) for the partners j of i in `list` closer than about `cutoff` at x, in list order
@@ -147,11 +150,16 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   report.external_impulse *= particle_mass_ * dt;
   report.body_impulse *= particle_mass_ * dt;
   report.wall_viscous_force *= particle_mass_ * viscous_factor;
+  // The first particle id (not internal index) that is not finite, found in parallel.
+  int first = n;
+#pragma omp parallel for schedule(static) reduction(min : first) if (n >= 4096)
   for (int id = 0; id < n; ++id) {
     const int i = rank_[id];
-    if (!position_star_[i].allFinite() || !velocity_star_[i].allFinite()) {
-      throw StabilityError(step_ + 1, id, "velocity", "not finite after the explicit step");
-    }
+    if (!position_star_[i].allFinite() || !velocity_star_[i].allFinite())
+      first = std::min(first, id);
+  }
+  if (first < n) {
+    throw StabilityError(step_ + 1, first, "velocity", "not finite after the explicit step");
   }
 }
 
@@ -512,14 +520,16 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
 void FluidSystem::finish_step(const StepConstants& c, StepReport& report) {
   const int n = c.n;
   scatter_state();
-  if (parameters_.periodic.enabled) {
-    for (int i = 0; i < n; ++i) positions_[i] = parameters_.periodic.fold(positions_[i]);
+  const bool periodic = parameters_.periodic.enabled;
+  double max_speed = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : max_speed) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
+    if (periodic) positions_[i] = parameters_.periodic.fold(positions_[i]);
+    if (is_fluid(kinds_[i])) max_speed = std::max(max_speed, velocities_[i].norm());
   }
+  report.max_speed = max_speed;
   time_ += c.dt;
   step_ += 1;
-  for (int i = 0; i < n; ++i) {
-    if (is_fluid(kinds_[i])) report.max_speed = std::max(report.max_speed, velocities_[i].norm());
-  }
   check_stability(step_);
 }
 

@@ -152,7 +152,9 @@ double FluidSystem::stable_dt() const {
   const MpsParameters& p = parameters_;
   const double l0 = p.particle_spacing;
   double max_speed = 0.0;
-  for (std::size_t i = 0; i < positions_.size(); ++i) {
+  const int n = particle_count();
+#pragma omp parallel for schedule(static) reduction(max : max_speed) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
     if (is_fluid(kinds_[i])) max_speed = std::max(max_speed, velocities_[i].norm());
   }
   double dt = p.max_dt;
@@ -163,32 +165,47 @@ double FluidSystem::stable_dt() const {
   return dt;
 }
 
+// The first particle (in index order) that fails a check is found in parallel; the checks are
+// then run on it alone, so the error is the one a serial scan would throw first.
 void FluidSystem::check_stability(long step) const {
   const int n = particle_count();
-  const bool two_d = parameters_.dimension == 2;
+  int first = n;
+#pragma omp parallel for schedule(static) reduction(min : first) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (is_inactive(kinds_[i])) continue;  // pooled by the open boundaries
-    const Eigen::Vector3d& x = positions_[i];
-    const Eigen::Vector3d& u = velocities_[i];
-    if (!x.allFinite()) throw StabilityError(step, i, "position", "not finite");
-    if (!u.allFinite()) throw StabilityError(step, i, "velocity", "not finite");
-    if (!std::isfinite(pressures_[i])) throw StabilityError(step, i, "pressure", "not finite");
-    bool inside = true;
-    for (int axis = 0; axis < (two_d ? 2 : 3); ++axis) {
-      inside = inside && x[axis] >= domain_box_.min()[axis] && x[axis] <= domain_box_.max()[axis];
-    }
-    if (!inside) {
-      std::ostringstream detail;
-      detail << "escaped the domain box at (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
-      throw StabilityError(step, i, "position", detail.str());
-    }
-    const double speed = u.norm();
-    if (speed > parameters_.runaway_speed) {
-      std::ostringstream detail;
-      detail << "speed " << speed << " m/s exceeds runaway_speed " << parameters_.runaway_speed;
-      throw StabilityError(step, i, "velocity", detail.str());
-    }
+    if (!stable_particle(i)) first = std::min(first, i);
   }
+  if (first < n) throw_instability(step, first);
+}
+
+bool FluidSystem::stable_particle(int i) const {
+  if (is_inactive(kinds_[i])) return true;  // pooled by the open boundaries
+  const Eigen::Vector3d& x = positions_[i];
+  if (!x.allFinite() || !velocities_[i].allFinite() || !std::isfinite(pressures_[i])) return false;
+  for (int axis = 0; axis < (parameters_.dimension == 2 ? 2 : 3); ++axis) {
+    if (!(x[axis] >= domain_box_.min()[axis] && x[axis] <= domain_box_.max()[axis])) return false;
+  }
+  return !(velocities_[i].norm() > parameters_.runaway_speed);
+}
+
+void FluidSystem::throw_instability(long step, int i) const {
+  const Eigen::Vector3d& x = positions_[i];
+  const Eigen::Vector3d& u = velocities_[i];
+  if (!x.allFinite()) throw StabilityError(step, i, "position", "not finite");
+  if (!u.allFinite()) throw StabilityError(step, i, "velocity", "not finite");
+  if (!std::isfinite(pressures_[i])) throw StabilityError(step, i, "pressure", "not finite");
+  bool inside = true;
+  for (int axis = 0; axis < (parameters_.dimension == 2 ? 2 : 3); ++axis) {
+    inside = inside && x[axis] >= domain_box_.min()[axis] && x[axis] <= domain_box_.max()[axis];
+  }
+  if (!inside) {
+    std::ostringstream detail;
+    detail << "escaped the domain box at (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
+    throw StabilityError(step, i, "position", detail.str());
+  }
+  const double speed = u.norm();
+  std::ostringstream detail;
+  detail << "speed " << speed << " m/s exceeds runaway_speed " << parameters_.runaway_speed;
+  throw StabilityError(step, i, "velocity", detail.str());
 }
 
 void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& position,

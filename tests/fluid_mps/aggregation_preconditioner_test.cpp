@@ -100,9 +100,9 @@ TEST(MpsAggregationPreconditioner, SameBitsWithOneTwoAndThreeThreads) {
   omp_set_num_threads(threads);
   for (int k = 1; k < 3; ++k) {
     EXPECT_EQ(iterations[k], iterations[0]);
-    EXPECT_EQ(std::memcmp(solutions[k].data(), solutions[0].data(),
-                          solutions[0].size() * sizeof(double)),
-              0)
+    EXPECT_EQ(
+        std::memcmp(solutions[k].data(), solutions[0].data(), solutions[0].size() * sizeof(double)),
+        0)
         << k + 1 << " threads";
   }
 }

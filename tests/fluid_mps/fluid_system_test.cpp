@@ -163,9 +163,11 @@ TEST(MpsFluidSystem, FluidParticlesNearPointsAreTheFluidWithinTheRadius) {
   const double l0 = tank.particle_spacing;
   const FluidSystem still(tank, still_water_tank(tank, 0.2, 0.1, 0.2));
   // Next to the left wall, on the bed, mid-tank, on the surface, in the air.
-  const std::vector<Eigen::Vector3d> points = {
-      {0.5 * l0, 0.05, 0.0}, {0.1, 0.5 * l0, 0.0}, {0.1, 0.05, 0.0}, {0.15, 0.1, 0.0},
-      {0.1, 0.5, 0.0}};
+  const std::vector<Eigen::Vector3d> points = {{0.5 * l0, 0.05, 0.0},
+                                               {0.1, 0.5 * l0, 0.0},
+                                               {0.1, 0.05, 0.0},
+                                               {0.15, 0.1, 0.0},
+                                               {0.1, 0.5, 0.0}};
   const auto groups = still.fluid_particles_near(points, 2.0 * l0);
   ASSERT_EQ(groups.size(), points.size());
   for (std::size_t q = 0; q < points.size(); ++q) {
@@ -240,6 +242,27 @@ TEST(MpsFluidSystem, EscapedParticleThrowsStabilityErrorNamingIt) {
     EXPECT_EQ(e.particle(), 2);
     EXPECT_EQ(e.quantity(), "position");
     EXPECT_NE(std::string(e.what()).find("particle 2"), std::string::npos);
+  }
+}
+
+// Enough particles for the parallel check: of two failing particles the lower index is named,
+// and one that is both out of the box and too fast is reported as escaped, as a serial scan
+// in index order reports it.
+TEST(MpsFluidSystem, StabilityErrorNamesTheFirstFailingParticle) {
+  MpsParameters p = small_parameters();
+  p.gravity.setZero();
+  p.domain = Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(600, 1, 1));
+  FluidSystem system(p, isolated_particles(5000, 0.1));
+  // Set after the start's own check; in one step of 0.02 s they leave the box (|y| <= 1 m).
+  system.set_velocity(4500, Eigen::Vector3d(0.0, 2.0 * p.runaway_speed, 0.0));
+  system.set_velocity(1200, Eigen::Vector3d(0.0, 2.0 * p.runaway_speed, 0.0));
+  try {
+    system.step(0.02);
+    FAIL() << "expected a StabilityError";
+  } catch (const StabilityError& e) {
+    EXPECT_EQ(e.particle(), 1200);
+    EXPECT_EQ(e.quantity(), "position");
+    EXPECT_NE(std::string(e.what()).find("escaped the domain box"), std::string::npos) << e.what();
   }
 }
 
