@@ -165,34 +165,27 @@ double FluidSystem::stable_dt() const {
   return dt;
 }
 
-// The first particle (in index order) that fails a check is found in parallel; the checks are
-// then run on it alone, so the error is the one a serial scan would throw first.
+// The first particle (in index order) that fails a check is found in parallel, so the error is
+// the one a serial scan would throw first.
 void FluidSystem::check_stability(long step) const {
   const int n = particle_count();
   int first = n;
 #pragma omp parallel for schedule(static) reduction(min : first) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (!stable_particle(i)) first = std::min(first, i);
+    if (instability(step, i)) first = std::min(first, i);
   }
-  if (first < n) throw_instability(step, first);
+  if (first < n) throw *instability(step, first);
 }
 
-bool FluidSystem::stable_particle(int i) const {
-  if (is_inactive(kinds_[i])) return true;  // pooled by the open boundaries
-  const Eigen::Vector3d& x = positions_[i];
-  if (!x.allFinite() || !velocities_[i].allFinite() || !std::isfinite(pressures_[i])) return false;
-  for (int axis = 0; axis < (parameters_.dimension == 2 ? 2 : 3); ++axis) {
-    if (!(x[axis] >= domain_box_.min()[axis] && x[axis] <= domain_box_.max()[axis])) return false;
-  }
-  return !(velocities_[i].norm() > parameters_.runaway_speed);
-}
-
-void FluidSystem::throw_instability(long step, int i) const {
+// The error of particle i's first failing check, in the order the checks are listed; none if
+// it passes them all.
+std::optional<StabilityError> FluidSystem::instability(long step, int i) const {
+  if (is_inactive(kinds_[i])) return std::nullopt;  // pooled by the open boundaries
   const Eigen::Vector3d& x = positions_[i];
   const Eigen::Vector3d& u = velocities_[i];
-  if (!x.allFinite()) throw StabilityError(step, i, "position", "not finite");
-  if (!u.allFinite()) throw StabilityError(step, i, "velocity", "not finite");
-  if (!std::isfinite(pressures_[i])) throw StabilityError(step, i, "pressure", "not finite");
+  if (!x.allFinite()) return StabilityError(step, i, "position", "not finite");
+  if (!u.allFinite()) return StabilityError(step, i, "velocity", "not finite");
+  if (!std::isfinite(pressures_[i])) return StabilityError(step, i, "pressure", "not finite");
   bool inside = true;
   for (int axis = 0; axis < (parameters_.dimension == 2 ? 2 : 3); ++axis) {
     inside = inside && x[axis] >= domain_box_.min()[axis] && x[axis] <= domain_box_.max()[axis];
@@ -200,12 +193,15 @@ void FluidSystem::throw_instability(long step, int i) const {
   if (!inside) {
     std::ostringstream detail;
     detail << "escaped the domain box at (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
-    throw StabilityError(step, i, "position", detail.str());
+    return StabilityError(step, i, "position", detail.str());
   }
   const double speed = u.norm();
-  std::ostringstream detail;
-  detail << "speed " << speed << " m/s exceeds runaway_speed " << parameters_.runaway_speed;
-  throw StabilityError(step, i, "velocity", detail.str());
+  if (speed > parameters_.runaway_speed) {
+    std::ostringstream detail;
+    detail << "speed " << speed << " m/s exceeds runaway_speed " << parameters_.runaway_speed;
+    return StabilityError(step, i, "velocity", detail.str());
+  }
+  return std::nullopt;
 }
 
 void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& position,

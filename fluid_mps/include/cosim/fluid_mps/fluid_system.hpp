@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -174,8 +175,7 @@ class FluidSystem {
 
   void initialise();
   void check_stability(long step) const;
-  bool stable_particle(int i) const;
-  [[noreturn]] void throw_instability(long step, int i) const;
+  std::optional<StabilityError> instability(long step, int i) const;
   // Stages of step(), in order (fluid_step.cpp).
   void predict(const StepConstants& c, StepReport& report);
   void collide(const StepConstants& c, StepReport& report);
