@@ -520,14 +520,11 @@ void FluidSystem::correct_with_pressure_gradient(const StepConstants& c, StepRep
 void FluidSystem::finish_step(const StepConstants& c, StepReport& report) {
   const int n = c.n;
   scatter_state();
-  const bool periodic = parameters_.periodic.enabled;
-  double max_speed = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : max_speed) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    if (periodic) positions_[i] = parameters_.periodic.fold(positions_[i]);
-    if (is_fluid(kinds_[i])) max_speed = std::max(max_speed, velocities_[i].norm());
+  if (parameters_.periodic.enabled) {
+#pragma omp parallel for schedule(static) if (n >= 4096)
+    for (int i = 0; i < n; ++i) positions_[i] = parameters_.periodic.fold(positions_[i]);
   }
-  report.max_speed = max_speed;
+  report.max_speed = max_fluid_speed();
   time_ += c.dt;
   step_ += 1;
   check_stability(step_);

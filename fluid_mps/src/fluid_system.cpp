@@ -148,15 +148,20 @@ double FluidSystem::lambda_laplacian() const {
   return laplacian_sums_.lambda_over_l0sq * l0 * l0;
 }
 
-double FluidSystem::stable_dt() const {
-  const MpsParameters& p = parameters_;
-  const double l0 = p.particle_spacing;
+double FluidSystem::max_fluid_speed() const {
   double max_speed = 0.0;
   const int n = particle_count();
 #pragma omp parallel for schedule(static) reduction(max : max_speed) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (is_fluid(kinds_[i])) max_speed = std::max(max_speed, velocities_[i].norm());
   }
+  return max_speed;
+}
+
+double FluidSystem::stable_dt() const {
+  const MpsParameters& p = parameters_;
+  const double l0 = p.particle_spacing;
+  const double max_speed = max_fluid_speed();
   double dt = p.max_dt;
   if (max_speed > 0.0) dt = std::min(dt, p.courant * l0 / max_speed);
   if (p.kinematic_viscosity > 0.0) {

@@ -176,6 +176,7 @@ class FluidSystem {
   void initialise();
   void check_stability(long step) const;
   std::optional<StabilityError> instability(long step, int i) const;
+  double max_fluid_speed() const;  // [m/s], over the fluid particles
   // Stages of step(), in order (fluid_step.cpp).
   void predict(const StepConstants& c, StepReport& report);
   void collide(const StepConstants& c, StepReport& report);
