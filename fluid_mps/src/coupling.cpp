@@ -32,18 +32,18 @@ std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
   reach.max().array() += radius;
   const int n = static_cast<int>(positions.size());
   std::vector<char> include(n, 0);
-  std::vector<Eigen::Vector3d> kept;
+  bool any = false;
   for (int i = 0; i < n; ++i) {
     if (kinds[i] != ParticleKind::fluid) continue;
     Eigen::Vector3d x = positions[i];
     if (p.periodic.enabled) x.x() = reach.min().x();  // any x is within reach across the seam
     if (p.dimension == 2) x.z() = reach.min().z();
-    if (!reach.contains(x)) continue;
-    include[i] = 1;
-    kept.push_back(positions[i]);
+    include[i] = reach.contains(x) ? 1 : 0;
+    any = any || include[i];
   }
-  if (kept.empty()) return result;
-  NeighbourGrid grid(p.dimension, bounding_box(kept, p.dimension, cell), cell, p.periodic);
+  if (!any) return result;
+  NeighbourGrid grid(p.dimension, bounding_box(positions, p.dimension, cell, &include), cell,
+                     p.periodic);
   grid.build(positions, &include);
   const int count = static_cast<int>(points.size());
   // One buffer a thread and one allocation a group: the groups' growth by push_back, freed later

@@ -77,18 +77,14 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
   const bool any_inactive = std::any_of(kind_.begin(), kind_.end(), is_inactive);
   auto grid_at = [&](const std::vector<Eigen::Vector3d>& at) {
     include_.clear();
-    scratch_.clear();
     if (any_inactive) {
       include_.resize(n);
-      for (int k = 0; k < n; ++k) {
-        include_[k] = is_inactive(kind_[k]) ? 0 : 1;
-        if (include_[k]) scratch_.push_back(at[k]);
-      }
+      for (int k = 0; k < n; ++k) include_[k] = is_inactive(kind_[k]) ? 0 : 1;
     }
-    NeighbourGrid grid(p.dimension,
-                       bounding_box(any_inactive ? scratch_ : at, p.dimension, list_radius),
+    const std::vector<char>* included = any_inactive ? &include_ : nullptr;
+    NeighbourGrid grid(p.dimension, bounding_box(at, p.dimension, list_radius, included),
                        list_radius, p.periodic);
-    grid.build(at, any_inactive ? &include_ : nullptr);
+    grid.build(at, included);
     return grid;
   };
   NeighbourGrid grid = grid_at(x);

@@ -9,10 +9,12 @@
 namespace cosim::mps {
 
 Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, int dimension,
-                                 double margin) {
-  Eigen::AlignedBox3d box(Eigen::Vector3d::Zero());
-  if (!positions.empty()) box = Eigen::AlignedBox3d(positions.front());
-  for (const auto& x : positions) box.extend(x);
+                                 double margin, const std::vector<char>* include) {
+  Eigen::AlignedBox3d box;  // empty
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    if (!include || (*include)[i]) box.extend(positions[i]);
+  }
+  if (box.isEmpty()) box = Eigen::AlignedBox3d(Eigen::Vector3d::Zero());
   box.min().array() -= margin;
   box.max().array() += margin;
   if (dimension == 2) {

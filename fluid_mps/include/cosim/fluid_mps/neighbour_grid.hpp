@@ -25,10 +25,11 @@ struct NeighbourList {
   std::size_t pair_count() const { return index.size(); }
 };
 
-// Box around the positions grown by `margin`; in 2D the z extent is [-margin, margin]. Grids are
-// built on this box rather than the whole domain so memory follows the particles.
+// Box around the positions (with `include`, those with include[i] != 0) grown by `margin`; in
+// 2D the z extent is [-margin, margin]. Grids are built on this box rather than the whole domain
+// so memory follows the particles.
 Eigen::AlignedBox3d bounding_box(const std::vector<Eigen::Vector3d>& positions, int dimension,
-                                 double margin);
+                                 double margin, const std::vector<char>* include = nullptr);
 
 // Work arrays of NeighbourGrid::neighbours_by_key kept between searches: their capacity stays,
 // so a search after the first allocates nothing and touches no fresh pages (each search used to
