@@ -6,6 +6,17 @@
 #include <omp.h>
 
 namespace cosim::mps {
+namespace {
+
+// joined_ codes: a global aggregate (>= 0), none yet, or a stretch's k-th pass-3 aggregate as
+// own_code(k) = kFirstOwn - k (own_code is its own inverse).
+constexpr int kNoAggregate = -1;
+constexpr int kFirstOwn = -2;
+constexpr int own_code(int k) {
+  return kFirstOwn - k;
+}
+
+}  // namespace
 
 bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength) {
   invert_diagonal(matrix, inverse_diagonal_);
@@ -36,7 +47,7 @@ void AggregationPreconditioner::build_aggregates(const SparseRows& m, double str
   };
   const auto end_row = [&](int s) { return first_row(s + 1); };
   strong_.resize(n);
-  aggregate_.assign(n, -1);
+  aggregate_.assign(n, kNoAggregate);
   joined_.resize(n);
   first_count_.assign(static_cast<std::size_t>(stretches) + 1, 0);
   own_count_.assign(static_cast<std::size_t>(stretches) + 1, 0);
@@ -63,12 +74,14 @@ void AggregationPreconditioner::build_aggregates(const SparseRows& m, double str
       own_count_[s + 1] = join_pass(m, first_row(s), end_row(s));
     }
 #pragma omp single
-    for (int s = 0; s < stretches; ++s) own_count_[s + 1] += own_count_[s];
+    {
+      for (int s = 0; s < stretches; ++s) own_count_[s + 1] += own_count_[s];
+    }
 #pragma omp for schedule(static)
     for (int s = 0; s < stretches; ++s) {
       const int base = first_count_[stretches] + own_count_[s];
       for (int i = first_row(s); i < end_row(s); ++i) {
-        aggregate_[i] = joined_[i] >= 0 ? joined_[i] : base - 2 - joined_[i];
+        aggregate_[i] = joined_[i] >= 0 ? joined_[i] : base + own_code(joined_[i]);
       }
     }
   }
@@ -119,45 +132,40 @@ int AggregationPreconditioner::greedy_pass(const SparseRows& m, double strength,
   return count;
 }
 
-// Pass 2 for row i: the pass-1 aggregate of its strongest strong neighbour, or -1.
-int AggregationPreconditioner::strongest_aggregate(const SparseRows& m, int i) const {
-  const double strong = strong_[i];
-  int best = -1;
+// The label of row i's strongest strong neighbour among those `label` gives one (>= 0 in pass 2,
+// <= kFirstOwn in pass 3), or kNoAggregate.
+template <class Label>
+int strongest_label(const SparseRows& m, const std::vector<double>& strong, int i, Label label) {
+  int best = kNoAggregate;
   double best_weight = 0.0;
   for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
     const int j = m.column[k];
-    if (j != i && -m.value[k] >= strong && aggregate_[j] >= 0 && -m.value[k] > best_weight) {
-      best_weight = -m.value[k];
-      best = aggregate_[j];
-    }
+    if (j == i || -m.value[k] < strong[i] || -m.value[k] <= best_weight) continue;
+    const int found = label(j);
+    if (found == kNoAggregate) continue;
+    best_weight = -m.value[k];
+    best = found;
   }
   return best;
 }
 
-// Passes 2 and 3 on rows [begin, end): joined_ gets each row's global aggregate from pass 1 or 2,
-// or -2 - k for the stretch's k-th pass-3 aggregate. In pass 3, in row order, a row still left
-// joins the pass-3 aggregate of its strongest strong neighbour in the stretch, or starts one.
-// Returns the number of pass-3 aggregates.
+// Passes 2 and 3 on rows [begin, end): joined_ gets each row's global aggregate from pass 1 or 2
+// (pass 2 reads pass 1's aggregate_ only), or own_code(k) for the stretch's k-th pass-3 aggregate.
+// In pass 3, in row order, a row still left joins the pass-3 aggregate of its strongest strong
+// neighbour in the stretch, or starts one. Returns the number of pass-3 aggregates.
 int AggregationPreconditioner::join_pass(const SparseRows& m, int begin, int end) {
-  constexpr int kLeft = -1;
   for (int i = begin; i < end; ++i) {
-    joined_[i] = aggregate_[i] >= 0 ? aggregate_[i] : strongest_aggregate(m, i);
+    joined_[i] = aggregate_[i] >= 0 ? aggregate_[i] : strongest_label(m, strong_, i, [&](int j) {
+      return aggregate_[j] >= 0 ? aggregate_[j] : kNoAggregate;
+    });
   }
   int own = 0;
   for (int i = begin; i < end; ++i) {
-    if (joined_[i] != kLeft) continue;
-    const double strong = strong_[i];
-    int best = kLeft;
-    double best_weight = 0.0;
-    for (std::int64_t k = m.offset[i]; k < m.offset[i + 1]; ++k) {
-      const int j = m.column[k];
-      if (j != i && j >= begin && j < end && joined_[j] < kLeft && -m.value[k] >= strong &&
-          -m.value[k] > best_weight) {
-        best_weight = -m.value[k];
-        best = joined_[j];
-      }
-    }
-    joined_[i] = best != kLeft ? best : kLeft - 1 - own++;
+    if (joined_[i] != kNoAggregate) continue;
+    const int best = strongest_label(m, strong_, i, [&](int j) {
+      return j >= begin && j < end && joined_[j] <= kFirstOwn ? joined_[j] : kNoAggregate;
+    });
+    joined_[i] = best != kNoAggregate ? best : own_code(own++);
   }
   return own;
 }

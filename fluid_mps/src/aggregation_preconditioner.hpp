@@ -43,7 +43,6 @@ class AggregationPreconditioner {
  private:
   void build_aggregates(const SparseRows& matrix, double strength);
   int greedy_pass(const SparseRows& matrix, double strength, int begin, int end);
-  int strongest_aggregate(const SparseRows& matrix, int row) const;
   int join_pass(const SparseRows& matrix, int begin, int end);
   void build_coarse_matrix(const SparseRows& matrix);
 
