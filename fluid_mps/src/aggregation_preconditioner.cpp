@@ -22,6 +22,11 @@ bool AggregationPreconditioner::setup(const SparseRows& matrix, double strength)
   invert_diagonal(matrix, inverse_diagonal_);
   build_aggregates(matrix, strength);
   build_coarse_matrix(matrix);
+  aggregate_of_key_.clear();
+  return factorize();
+}
+
+bool AggregationPreconditioner::factorize() {
   factor_.compute(coarse_);
   // A pivot at round-off of the largest means a (numerically) singular coarse matrix: the
   // system itself is then only semi-definite, and Jacobi alone is the safe preconditioner.
@@ -85,15 +90,69 @@ void AggregationPreconditioner::build_aggregates(const SparseRows& m, double str
       }
     }
   }
-  const int count = first_count_[stretches] + own_count_[stretches];
-  aggregate_count_ = count;
-  // Members of each aggregate in row order (a counting sort).
+  aggregate_count_ = first_count_[stretches] + own_count_[stretches];
+  gather_members(n);
+}
+
+// Members of each aggregate in row order (a counting sort); rows without one are left out.
+void AggregationPreconditioner::gather_members(int n) {
+  const int count = aggregate_count_;
   member_offset_.assign(static_cast<std::size_t>(count) + 1, 0);
-  for (int i = 0; i < n; ++i) ++member_offset_[aggregate_[i] + 1];
+  for (int i = 0; i < n; ++i) {
+    if (aggregate_[i] >= 0) ++member_offset_[aggregate_[i] + 1];
+  }
   for (int a = 0; a < count; ++a) member_offset_[a + 1] += member_offset_[a];
-  member_.resize(n);
+  member_.resize(member_offset_[count]);
   member_cursor_.assign(member_offset_.begin(), member_offset_.end() - 1);
-  for (int i = 0; i < n; ++i) member_[member_cursor_[aggregate_[i]]++] = i;
+  for (int i = 0; i < n; ++i) {
+    if (aggregate_[i] >= 0) member_[member_cursor_[aggregate_[i]]++] = i;
+  }
+}
+
+void AggregationPreconditioner::export_setup(PressureSetupState& state) const {
+  state.aggregate_of_key = aggregate_of_key_;
+  state.aggregate_count = aggregate_count_;
+  state.coarse_row.clear();
+  state.coarse_column.clear();
+  state.coarse_value.clear();
+  for (int column = 0; column < coarse_.outerSize(); ++column) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(coarse_, column); it; ++it) {
+      state.coarse_row.push_back(static_cast<int>(it.row()));
+      state.coarse_column.push_back(column);
+      state.coarse_value.push_back(it.value());
+    }
+  }
+}
+
+bool AggregationPreconditioner::import_setup(const PressureSetupState& state) {
+  aggregate_of_key_ = state.aggregate_of_key;
+  aggregate_count_ = state.aggregate_count;
+  lower_.clear();
+  for (std::size_t k = 0; k < state.coarse_value.size(); ++k) {
+    lower_.emplace_back(state.coarse_row[k], state.coarse_column[k], state.coarse_value[k]);
+  }
+  coarse_.resize(aggregate_count_, aggregate_count_);
+  coarse_.setFromTriplets(lower_.begin(), lower_.end());
+  return factorize();
+}
+
+void AggregationPreconditioner::remember_keys(const std::vector<int>& row_keys, int key_count) {
+  aggregate_of_key_.assign(key_count, kNoAggregate);
+  for (std::size_t i = 0; i < row_keys.size(); ++i) aggregate_of_key_[row_keys[i]] = aggregate_[i];
+}
+
+bool AggregationPreconditioner::reuse(const SparseRows& matrix, const std::vector<int>& row_keys) {
+  if (!factored_ || aggregate_of_key_.empty()) return false;
+  const int n = matrix.rows();
+  invert_diagonal(matrix, inverse_diagonal_);
+  aggregate_.resize(n);
+  const int keys = static_cast<int>(aggregate_of_key_.size());
+  for (int i = 0; i < n; ++i) {
+    const int key = row_keys[i];
+    aggregate_[i] = key >= 0 && key < keys ? aggregate_of_key_[key] : kNoAggregate;
+  }
+  gather_members(n);
+  return true;
 }
 
 // Pass 1 on rows [begin, end), numbering its aggregates from 0; returns their count. Also sets
@@ -232,7 +291,9 @@ void AggregationPreconditioner::apply(const std::vector<double>& r, std::vector<
   }
   coarse_solution_ = factor_.solve(coarse_rhs_);
 #pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) z[i] += coarse_solution_[aggregate_[i]];
+  for (int i = 0; i < n; ++i) {
+    if (aggregate_[i] >= 0) z[i] += coarse_solution_[aggregate_[i]];
+  }
 }
 
 }  // namespace cosim::mps

@@ -39,12 +39,29 @@ class AggregationPreconditioner {
   bool setup(const SparseRows& matrix, double strength = kAggregationStrength);
   // z = D^-1 r + P A_c^-1 P^T r.
   void apply(const std::vector<double>& r, std::vector<double>& z);
+  // Keys the aggregates of the last setup() by `row_keys` (a key per row, e.g. a particle id, in
+  // [0, key_count)), so that reuse() can find them for another matrix of the same keys.
+  void remember_keys(const std::vector<int>& row_keys, int key_count);
+  // The last setup's aggregates and coarse factor for `matrix`: each row joins the aggregate its
+  // key had (a key that had none gets the Jacobi part only), the diagonal is `matrix`'s own.
+  // M^-1 = D^-1 + P A_c^-1 P^T stays symmetric positive definite, so CG converges with it;
+  // A_c is the old P^T A P. Returns false if there is nothing to reuse.
+  bool reuse(const SparseRows& matrix, const std::vector<int>& row_keys);
+  // The keyed aggregates and coarse matrix (kept and age are the caller's), and back: import
+  // factorises the coarse matrix again (the same matrix, so the same factor) and returns false
+  // if it is not positive definite.
+  void export_setup(PressureSetupState& state) const;
+  bool import_setup(const PressureSetupState& state);
 
  private:
   void build_aggregates(const SparseRows& matrix, double strength);
   int greedy_pass(const SparseRows& matrix, double strength, int begin, int end);
   int join_pass(const SparseRows& matrix, int begin, int end);
   void build_coarse_matrix(const SparseRows& matrix);
+  void gather_members(int rows);
+  bool factorize();  // the coarse matrix's LDL^T; false if it is not positive definite
+
+  std::vector<int> aggregate_of_key_;  // remember_keys: the aggregate of each key, or -1
 
   std::vector<double> inverse_diagonal_;
   std::vector<double> strong_;               // strength threshold of each row

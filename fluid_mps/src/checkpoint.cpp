@@ -1,5 +1,8 @@
 #include "cosim/fluid_mps/checkpoint.hpp"
 
+#include <cstdint>
+#include <vector>
+
 namespace cosim::mps {
 
 void save_checkpoint(const FluidSystem& system, checkpoint::Writer& out) {
@@ -12,12 +15,66 @@ void save_checkpoint(const FluidSystem& system, checkpoint::Writer& out) {
   out.vector("fluid.kinds", state.kinds);
   out.value("fluid.time", state.time);
   out.value("fluid.step", static_cast<std::int64_t>(state.step));
+  const PressureSetupState& setup = state.pressure_setup;
+  if (!setup.kept) return;
+  const std::vector<std::int32_t> counts{setup.age, setup.base_iterations, setup.last_iterations,
+                                         setup.aggregate_count};
+  out.vector("fluid.pressure_setup.counts", counts);
+  out.vector("fluid.pressure_setup.aggregate_of_key", setup.aggregate_of_key);
+  out.vector("fluid.pressure_setup.coarse_row", setup.coarse_row);
+  out.vector("fluid.pressure_setup.coarse_column", setup.coarse_column);
+  out.vector("fluid.pressure_setup.coarse_value", setup.coarse_value);
 }
 
+namespace {
+
+// The aggregation set-up in reuse (schema 2 on; a checkpoint without it gets a fresh set-up).
+PressureSetupState load_pressure_setup(const checkpoint::Reader& in, std::size_t particles) {
+  PressureSetupState setup;
+  if (!in.has("fluid.pressure_setup.counts")) return setup;
+  const auto counts = in.vector<std::int32_t>("fluid.pressure_setup.counts");
+  if (counts.size() != 4 || counts[0] < 0 || counts[3] <= 0) {
+    in.fail("fluid.pressure_setup.counts", "is not an age, two iteration counts and a size");
+  }
+  setup.kept = true;
+  setup.age = counts[0];
+  setup.base_iterations = counts[1];
+  setup.last_iterations = counts[2];
+  setup.aggregate_count = counts[3];
+  setup.aggregate_of_key = in.vector<int>("fluid.pressure_setup.aggregate_of_key");
+  if (setup.aggregate_of_key.size() > particles) {
+    in.fail("fluid.pressure_setup.aggregate_of_key", "has more keys than there are particles");
+  }
+  for (const int a : setup.aggregate_of_key) {
+    if (a < -1 || a >= setup.aggregate_count) {
+      in.fail("fluid.pressure_setup.aggregate_of_key", "names an aggregate that does not exist");
+    }
+  }
+  setup.coarse_row = in.vector<int>("fluid.pressure_setup.coarse_row");
+  setup.coarse_column = in.vector<int>("fluid.pressure_setup.coarse_column");
+  setup.coarse_value = in.vector<double>("fluid.pressure_setup.coarse_value");
+  const std::size_t entries = setup.coarse_value.size();
+  if (setup.coarse_row.size() != entries || setup.coarse_column.size() != entries) {
+    in.fail("fluid.pressure_setup.coarse_row",
+            "and the coarse columns and values differ in length");
+  }
+  for (std::size_t k = 0; k < entries; ++k) {
+    const int row = setup.coarse_row[k], column = setup.coarse_column[k];
+    if (column < 0 || row < column || row >= setup.aggregate_count) {
+      in.fail("fluid.pressure_setup.coarse_row",
+              "holds an entry outside the coarse matrix's lower triangle");
+    }
+  }
+  return setup;
+}
+
+}  // namespace
+
 MpsState load_checkpoint(const checkpoint::Reader& in) {
+  // Schema 1 had no pressure set-up: it reads as one without a set-up in reuse.
   if (const auto schema = in.value<std::uint32_t>("fluid.schema");
-      schema != kFluidCheckpointSchema) {
-    in.fail("fluid.schema", "is " + std::to_string(schema) + " where this build reads " +
+      schema != kFluidCheckpointSchema && schema != 1) {
+    in.fail("fluid.schema", "is " + std::to_string(schema) + " where this build reads 1 and " +
                                 std::to_string(kFluidCheckpointSchema));
   }
   MpsState state;
@@ -36,6 +93,7 @@ MpsState load_checkpoint(const checkpoint::Reader& in) {
   }
   state.time = in.value<double>("fluid.time");
   state.step = static_cast<long>(in.value<std::int64_t>("fluid.step"));
+  state.pressure_setup = load_pressure_setup(in, n);
   return state;
 }
 

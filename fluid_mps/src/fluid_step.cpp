@@ -370,6 +370,10 @@ void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift,
 
 void FluidSystem::solve_pressure(StepReport& report) {
   const bool amg = pressure_solver_.uses_amg(matrix_.rows());
+  row_keys_.resize(unknown_particle_.size());
+  for (std::size_t row = 0; row < unknown_particle_.size(); ++row)
+    row_keys_[row] = order_[unknown_particle_[row]];
+  pressure_solver_.set_row_keys(&row_keys_, particle_count());
   const PcgResult pcg =
       pressure_solver_.solve(matrix_, rhs_, solution_, parameters_.pcg_tolerance,
                              parameters_.pcg_max_iterations, amg ? &hierarchy_matrix_ : nullptr);

@@ -64,6 +64,7 @@ FluidSystem::FluidSystem(MpsParameters parameters, const MpsState& state)
     throw std::invalid_argument("MpsState: pressures and positions differ in size");
   }
   initialise();
+  pressure_solver_.restore_setup(state.pressure_setup);
 }
 
 void FluidSystem::initialise() {
@@ -118,6 +119,7 @@ void FluidSystem::initialise() {
       break;
   }
   pressure_solver_.set_single_precision_product(p.single_precision_product);
+  pressure_solver_.set_setup_reuse(p.pressure_setup_reuse);
   using Product = MpsParameters::PressureProduct;
   pressure_solver_.set_upper_triangle_product(
       p.pressure_product == Product::upper_triangle ||
@@ -227,7 +229,8 @@ void FluidSystem::set_velocity(int i, const Eigen::Vector3d& velocity) {
 }
 
 MpsState FluidSystem::save_state() const {
-  return MpsState{positions_, velocities_, pressures_, kinds_, time_, step_};
+  return MpsState{
+      positions_, velocities_, pressures_, kinds_, time_, step_, pressure_solver_.setup_state()};
 }
 
 }  // namespace cosim::mps

@@ -100,6 +100,7 @@ double distance_to_polyline(const Eigen::Vector3d& x, const std::vector<Eigen::V
 AppendedWall append_wall_particles(MpsState& state, const std::vector<Eigen::Vector3d>& positions,
                                    double clearance) {
   AppendedWall wall;
+  state.pressure_setup = PressureSetupState{};  // its keys are the particles before the edit
   for (std::size_t i = 0; i < state.positions.size(); ++i) {
     if (state.kinds[i] == ParticleKind::fluid &&
         distance_to_polyline(state.positions[i], positions) < clearance) {

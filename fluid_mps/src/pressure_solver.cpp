@@ -387,6 +387,27 @@ UpperTriangle* PressureSolver::upper() {
   return upper_.get();
 }
 
+PressureSetupState PressureSolver::setup_state() const {
+  PressureSetupState state;
+  if (!setup_kept_ || !aggregation_) return state;
+  state.kept = true;
+  state.age = setup_age_;
+  state.base_iterations = base_iterations_;
+  state.last_iterations = last_iterations_;
+  aggregation_->two_level.export_setup(state);
+  return state;
+}
+
+void PressureSolver::restore_setup(const PressureSetupState& state) {
+  setup_kept_ = false;
+  if (!state.kept) return;
+  if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
+  setup_kept_ = aggregation_->two_level.import_setup(state);
+  setup_age_ = state.age;
+  base_iterations_ = state.base_iterations;
+  last_iterations_ = state.last_iterations;
+}
+
 PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<double>& rhs,
                                 std::vector<double>& x, double tolerance, int max_iterations,
                                 const SparseRows* hierarchy_matrix) {
@@ -401,13 +422,28 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
     return solve_incomplete_cholesky(matrix, rhs, x, tolerance, max_iterations);
   }
   const Preconditioner chosen = preconditioner_for(n);
+  if (chosen != Preconditioner::aggregation) setup_kept_ = false;
   if (chosen == Preconditioner::aggregation) {
     if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
-    aggregation_->two_level.setup(matrix);
-    return conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
-                               [&](const std::vector<double>& r, std::vector<double>& z) {
-                                 aggregation_->two_level.apply(r, z);
-                               });
+    AggregationPreconditioner& two_level = aggregation_->two_level;
+    const bool reused = setup_kept_ && row_keys_ && setup_age_ + 1 < setup_reuse_ &&
+                        last_iterations_ <= base_iterations_ + kSetupReuseMargin &&
+                        two_level.reuse(matrix, *row_keys_);
+    if (reused) {
+      ++setup_age_;
+    } else {
+      setup_kept_ = two_level.setup(matrix) && row_keys_ && setup_reuse_ > 1;
+      if (setup_kept_) two_level.remember_keys(*row_keys_, key_count_);
+      setup_age_ = 0;
+    }
+    const PcgResult result =
+        conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
+                            [&](const std::vector<double>& r, std::vector<double>& z) {
+                              aggregation_->two_level.apply(r, z);
+                            });
+    if (!reused) base_iterations_ = result.iterations;
+    last_iterations_ = result.iterations;
+    return result;
   }
   if (chosen == Preconditioner::amg) {
     if (!amg_) amg_ = std::make_unique<Amg>();

@@ -1,5 +1,6 @@
 #include "cosim/fluid_mps/restart.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -9,7 +10,7 @@ namespace cosim::mps {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'O', 'S', 'I', 'M', 'M', 'P', 'S'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: the pressure set-up in reuse after the particles
 
 template <class T>
 void write(std::ofstream& out, const T& value) {
@@ -20,6 +21,67 @@ template <class T>
 void read(std::ifstream& in, T& value, const std::string& path) {
   in.read(reinterpret_cast<char*>(&value), sizeof(T));
   if (!in) throw std::runtime_error("load_state: truncated file " + path);
+}
+
+template <class T>
+void write_array(std::ofstream& out, const std::vector<T>& values) {
+  write(out, static_cast<std::uint64_t>(values.size()));
+  out.write(reinterpret_cast<const char*>(values.data()),
+            static_cast<std::streamsize>(values.size() * sizeof(T)));
+}
+
+template <class T>
+void read_array(std::ifstream& in, std::vector<T>& values, std::uint64_t largest,
+                const std::string& path) {
+  std::uint64_t count = 0;
+  read(in, count, path);
+  if (count > largest) throw std::runtime_error("load_state: bad pressure set-up in " + path);
+  values.resize(count);
+  in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(count * sizeof(T)));
+  if (!in) throw std::runtime_error("load_state: truncated file " + path);
+}
+
+void write_setup(std::ofstream& out, const PressureSetupState& setup) {
+  write(out, static_cast<std::uint8_t>(setup.kept ? 1 : 0));
+  if (!setup.kept) return;
+  for (const std::int32_t count :
+       {setup.age, setup.base_iterations, setup.last_iterations, setup.aggregate_count}) {
+    write(out, count);
+  }
+  write_array(out, setup.aggregate_of_key);
+  write_array(out, setup.coarse_row);
+  write_array(out, setup.coarse_column);
+  write_array(out, setup.coarse_value);
+}
+
+// The set-up is checked where it is used (PressureSolver::restore_setup refactorises it); here
+// only that the arrays fit the file and each other.
+void read_setup(std::ifstream& in, PressureSetupState& setup, std::uint64_t particles,
+                const std::string& path) {
+  std::uint8_t kept = 0;
+  read(in, kept, path);
+  if (kept == 0) return;
+  std::int32_t counts[4];
+  for (std::int32_t& count : counts) read(in, count, path);
+  setup.kept = true;
+  setup.age = counts[0];
+  setup.base_iterations = counts[1];
+  setup.last_iterations = counts[2];
+  setup.aggregate_count = counts[3];
+  const std::uint64_t count = static_cast<std::uint64_t>(std::max(counts[3], 0));
+  read_array(in, setup.aggregate_of_key, particles, path);
+  read_array(in, setup.coarse_row, count * count, path);
+  read_array(in, setup.coarse_column, count * count, path);
+  read_array(in, setup.coarse_value, count * count, path);
+  const std::size_t entries = setup.coarse_value.size();
+  bool fits =
+      counts[3] > 0 && setup.coarse_row.size() == entries && setup.coarse_column.size() == entries;
+  for (const int a : setup.aggregate_of_key) fits = fits && a >= -1 && a < counts[3];
+  for (std::size_t k = 0; fits && k < entries; ++k) {
+    fits = setup.coarse_column[k] >= 0 && setup.coarse_row[k] >= setup.coarse_column[k] &&
+           setup.coarse_row[k] < counts[3];
+  }
+  if (!fits) throw std::runtime_error("load_state: bad pressure set-up in " + path);
 }
 
 }  // namespace
@@ -43,6 +105,7 @@ void save_state(const MpsState& state, const std::string& path) {
     write(out, state.pressures[i]);
     write(out, static_cast<std::int32_t>(state.kinds[i]));
   }
+  write_setup(out, state.pressure_setup);
   if (!out) throw std::runtime_error("save_state: write failed for " + path);
 }
 
@@ -53,8 +116,9 @@ MpsState load_state(const std::string& path) {
   in.read(magic, sizeof(magic));
   std::uint32_t version = 0;
   read(in, version, path);
-  if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0 || version != kVersion) {
-    throw std::runtime_error("load_state: " + path + " is not a fluid_mps restart file (v1)");
+  // Version 1 had no pressure set-up: read as one without a set-up in reuse.
+  if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0 || (version != 1 && version != kVersion)) {
+    throw std::runtime_error("load_state: " + path + " is not a fluid_mps restart file (v1, v2)");
   }
   std::uint64_t n = 0;
   std::int64_t step = 0;
@@ -76,6 +140,7 @@ MpsState load_state(const std::string& path) {
     if (kind < 0 || kind > 3) throw std::runtime_error("load_state: bad particle kind in " + path);
     state.kinds[i] = static_cast<ParticleKind>(kind);
   }
+  if (version >= 2) read_setup(in, state.pressure_setup, n, path);
   return state;
 }
 

@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "cosim/fluid_mps/boundaries.hpp"
+#include "cosim/fluid_mps/checkpoint.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/restart.hpp"
 #include "cosim/fluid_mps/scenes.hpp"
@@ -298,6 +299,67 @@ TEST(MpsFluidSystem, RestartFromFileContinuesBitForBit) {
     }
     EXPECT_TRUE(same_bits(straight, restarted));
     EXPECT_LT(searches, 40);  // the pair list is kept over steps
+  }
+}
+
+// The aggregation's set-up is reused over steps (pressure_setup_reuse); the state carries it, in
+// checkpoints too. A run continued from a checkpoint gives the straight run's bits, and one
+// continued without the set-up (a fresh one at its first step) does not: the set-up is what the
+// restart must carry.
+TEST(MpsFluidSystem, CheckpointCarriesThePressureSetUp) {
+  MpsParameters p = dam_parameters(8);
+  p.pressure_preconditioner = MpsParameters::PressurePreconditioner::aggregation;
+  FluidSystem straight(p, dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715));
+  for (int k = 0; k < 23; ++k) straight.step(straight.stable_dt());
+  cosim::checkpoint::Writer out("fluid_mps");
+  save_checkpoint(straight, out);
+  const MpsState state =
+      load_checkpoint(cosim::checkpoint::Reader(out.encode(), "memory", "fluid_mps"));
+  ASSERT_TRUE(state.pressure_setup.kept);
+  EXPECT_GT(state.pressure_setup.age, 0);  // mid-reuse: the next step reuses it
+  const PressureSetupState saved = straight.save_state().pressure_setup;
+  EXPECT_EQ(state.pressure_setup.aggregate_of_key, saved.aggregate_of_key);
+  EXPECT_EQ(state.pressure_setup.coarse_value, saved.coarse_value);
+  MpsState without = state;
+  without.pressure_setup = PressureSetupState{};
+  FluidSystem restarted(p, state), fresh(p, without);
+  for (int k = 0; k < 5; ++k) {
+    straight.step(straight.stable_dt());
+    restarted.step(restarted.stable_dt());
+    fresh.step(fresh.stable_dt());
+  }
+  EXPECT_TRUE(same_bits(straight, restarted));
+  EXPECT_FALSE(same_bits(straight, fresh));
+}
+
+// A set-up record that does not fit is refused, naming it.
+TEST(MpsFluidSystem, CheckpointRefusesABadPressureSetUp) {
+  MpsParameters p = dam_parameters(8);
+  p.pressure_preconditioner = MpsParameters::PressurePreconditioner::aggregation;
+  FluidSystem system(p, dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715));
+  system.step(system.stable_dt());
+  const MpsState state = system.save_state();
+  ASSERT_TRUE(state.pressure_setup.kept);
+  cosim::checkpoint::Writer out("fluid_mps");
+  out.value("fluid.schema", kFluidCheckpointSchema);
+  out.vector("fluid.positions", state.positions);
+  out.vector("fluid.velocities", state.velocities);
+  out.vector("fluid.pressures", state.pressures);
+  out.vector("fluid.kinds", state.kinds);
+  out.value("fluid.time", state.time);
+  out.value("fluid.step", static_cast<std::int64_t>(state.step));
+  out.vector("fluid.pressure_setup.counts", std::vector<std::int32_t>{0, 20, 20, 3});
+  out.vector("fluid.pressure_setup.aggregate_of_key", std::vector<int>{0, 1, 7});
+  out.vector("fluid.pressure_setup.coarse_row", std::vector<int>{0});
+  out.vector("fluid.pressure_setup.coarse_column", std::vector<int>{0});
+  out.vector("fluid.pressure_setup.coarse_value", std::vector<double>{1.0});
+  try {
+    load_checkpoint(cosim::checkpoint::Reader(out.encode(), "bad.ckpt", "fluid_mps"));
+    FAIL() << "an aggregate beyond the count was accepted";
+  } catch (const cosim::checkpoint::Error& error) {
+    EXPECT_NE(std::string(error.what()).find("fluid.pressure_setup.aggregate_of_key"),
+              std::string::npos)
+        << error.what();
   }
 }
 

@@ -1,8 +1,8 @@
 // Checkpoints of a FluidSystem: its MpsState (positions, velocities, pressures, kinds, time,
-// step count) as records of a checkpoint file. The forces and solid volumes of the coupling are
-// set again at the start of every window, and the pair list and multigrid hierarchy are rebuilt
-// without changing the sums (fluid_system.hpp), so FluidSystem(parameters, state) continues with
-// the same bits as the saved system.
+// step count, and the pressure solver's set-up in reuse) as records of a checkpoint file. The
+// forces and solid volumes of the coupling are set again at the start of every window, and the pair
+// list and multigrid hierarchy are rebuilt without changing the sums (fluid_system.hpp), so
+// FluidSystem(parameters, state) continues with the same bits as the saved system.
 #pragma once
 
 #include "cosim/checkpoint/archive.hpp"
@@ -11,7 +11,7 @@
 namespace cosim::mps {
 
 // Schema of the records below; bumped when they change.
-inline constexpr std::uint32_t kFluidCheckpointSchema = 1;
+inline constexpr std::uint32_t kFluidCheckpointSchema = 2;  // 2: the pressure set-up in reuse
 
 void save_checkpoint(const FluidSystem& system, checkpoint::Writer& out);
 // Throws checkpoint::Error naming the file and record when the state does not fit `parameters`

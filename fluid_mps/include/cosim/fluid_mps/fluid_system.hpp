@@ -63,6 +63,9 @@ struct MpsState {
   std::vector<ParticleKind> kinds;
   double time = 0.0;
   long step = 0;
+  // The pressure solver's set-up in reuse (by particle id): restored with the particles, it
+  // lets a restarted run continue with the same bits. Empty (kept false): a fresh set-up.
+  PressureSetupState pressure_setup;
 };
 
 class FluidSystem {
@@ -264,6 +267,7 @@ class FluidSystem {
   BackgroundField background_;
   std::vector<char> trusted_, untrusted_;  // S > 0, S < 1: where each estimate is needed
   std::vector<int> collided_, unknown_, unknown_particle_;
+  std::vector<int> row_keys_;  // particle id of each pressure unknown (the aggregation's reuse)
   std::vector<std::int64_t> row_length_;
   SparseRows matrix_, hierarchy_matrix_;
   LatticeSums hierarchy_sums_;

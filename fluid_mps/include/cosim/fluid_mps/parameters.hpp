@@ -110,6 +110,10 @@ struct MpsParameters {
   // in 2D, 10 000 in 3D; pressure_solver.hpp).
   enum class PressurePreconditioner { amg, jacobi, incomplete_cholesky, automatic, aggregation };
   PressurePreconditioner pressure_preconditioner = PressurePreconditioner::automatic;
+  // aggregation: how many solves one set-up (aggregates and coarse factor) may serve; it is
+  // rebuilt sooner once the CG takes 2 iterations more than on its first solve
+  // (pressure_solver.hpp). 1: a new set-up every step.
+  int pressure_setup_reuse = 10;
   // The products of the CG iterations read the matrix values rounded to float: 6 instead of 10
   // bytes an entry, for a product bound by reading the matrix. Changes the bits of the pressure
   // (a matrix perturbed by at most 2^-24 relative an entry); off by default
@@ -348,6 +352,10 @@ void visit_parameters(P& p, V& v) {
   v(Key("pressure_preconditioner")
         .doc("automatic: jacobi for small, aggregation for large systems"),
     p.pressure_preconditioner, kPreconditioners);
+  v(Key("pressure_setup_reuse")
+        .in(Range::between(1, 1000))
+        .doc("aggregation: solves one set-up may serve (1: a new one every step)"),
+    p.pressure_setup_reuse);
   v(Key("single_precision_product").doc("CG products read float matrix values (changes the bits)"),
     p.single_precision_product);
   v(Key("pressure_product")

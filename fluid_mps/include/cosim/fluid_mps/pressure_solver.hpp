@@ -45,7 +45,25 @@ enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic, aggrega
 // at 3 200 unknowns (a/l0 = 8), 1.03 at 8 100 (12), 0.78 at 16 100 (16). AMG (hypre) took
 // 1.5-2.2 times aggregation's step at every 2D size, so automatic no longer takes it.
 constexpr int kAggregationFromUnknowns = 1000;
+// A reused aggregation set-up is rebuilt once a solve takes more than this many CG iterations
+// beyond its first solve. On the dam break (a/l0 = 80) and the 3D column (a/l0 = 12) reuse over
+// up to 10 solves raised the mean iterations from 25.2 to 26.3 and 23.4 to 23.7, and cut the
+// one-thread step by 9-17 % and 8-9 % (docs/performance.md).
+constexpr int kSetupReuseMargin = 2;
 constexpr int kAggregationFromUnknowns3d = 10000;
+
+// What a pressure solver carries from one solve to the next that changes its results: the
+// aggregation's set-up while it is reused (PressureSolver::set_setup_reuse). Saved with the
+// particles in checkpoints and restart files, so a run continued from one gives the same bits.
+struct PressureSetupState {
+  bool kept = false;  // there is a set-up to reuse; the rest is empty without one
+  int age = 0;        // solves since the set-up was built
+  int base_iterations = 0, last_iterations = 0;  // CG iterations of its first and last solve
+  std::vector<int> aggregate_of_key;             // aggregate of each particle id, or -1
+  int aggregate_count = 0;
+  std::vector<int> coarse_row, coarse_column;  // A_c's lower triangle, column by column
+  std::vector<double> coarse_value;
+};
 
 // y = A x; each row summed in the order of its entries (the bits of the plain loop). With
 // `single_precision`, each value is first rounded to float (the bits of the plain loop over
@@ -91,6 +109,19 @@ class PressureSolver {
   PcgResult solve(const SparseRows& matrix, const std::vector<double>& rhs, std::vector<double>& x,
                   double tolerance, int max_iterations,
                   const SparseRows* hierarchy_matrix = nullptr);
+  // Reuse of the aggregation's set-up (aggregates and coarse factor) over up to `max_solves`
+  // solves (1: a new set-up every solve). A set-up is reused while the CG iterations stay within
+  // kSetupReuseMargin of those of its first solve; each row finds its aggregate by its key (the
+  // particle id, set_row_keys), and the Jacobi part always takes the current diagonal.
+  void set_setup_reuse(int max_solves) { setup_reuse_ = max_solves; }
+  // The key of each row of the next solves (kept by pointer), in [0, key_count).
+  void set_row_keys(const std::vector<int>* row_keys, int key_count) {
+    row_keys_ = row_keys;
+    key_count_ = key_count;
+  }
+  PressureSetupState setup_state() const;
+  // A state from setup_state(), e.g. of a checkpoint; refactorises the coarse matrix.
+  void restore_setup(const PressureSetupState& state);
   Preconditioner preconditioner() const { return preconditioner_; }
   // The products of the CG iterations read the matrix values rounded to float (fewer bytes an
   // entry; sums, vectors and the initial residual stay double, and true residuals with the
@@ -125,6 +156,11 @@ class PressureSolver {
   bool upper_triangle_ = false;
   std::unique_ptr<UpperTriangle> upper_;
   std::vector<double> inverse_diagonal_;
+  int setup_reuse_ = 1;
+  const std::vector<int>* row_keys_ = nullptr;
+  int key_count_ = 0;
+  bool setup_kept_ = false;  // the aggregation's last set-up is keyed and may be reused
+  int setup_age_ = 0, base_iterations_ = 0, last_iterations_ = 0;
 };
 
 }  // namespace cosim::mps
