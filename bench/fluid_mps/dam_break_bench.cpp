@@ -12,13 +12,17 @@ namespace {
 
 // Settings for side-by-side runs of one binary: COSIM_BENCH_MULTIGRID_RADIUS (the amg
 // hierarchy's radius / l0), COSIM_BENCH_SINGLE_PRODUCT (0 or 1: the CG products' float values)
-// and COSIM_BENCH_UPPER_TRIANGLE (0: full rows, 1: upper triangle; unset: automatic).
+// COSIM_BENCH_UPPER_TRIANGLE (0: full rows, 1: upper triangle; unset: automatic) and
+// COSIM_BENCH_SETUP_REUSE (pressure_setup_reuse: solves one aggregation set-up may serve).
 void apply_environment(cosim::mps::MpsParameters& p) {
   if (const char* radius = std::getenv("COSIM_BENCH_MULTIGRID_RADIUS")) {
     p.multigrid_radius_over_l0 = std::atof(radius);
   }
   if (const char* single = std::getenv("COSIM_BENCH_SINGLE_PRODUCT")) {
     p.single_precision_product = std::atoi(single) != 0;
+  }
+  if (const char* reuse = std::getenv("COSIM_BENCH_SETUP_REUSE")) {
+    p.pressure_setup_reuse = std::atoi(reuse);
   }
   if (const char* upper = std::getenv("COSIM_BENCH_UPPER_TRIANGLE")) {
     p.pressure_product = std::atoi(upper) != 0
