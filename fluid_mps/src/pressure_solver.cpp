@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <omp.h>
+
 #include "aggregation_preconditioner.hpp"
 #include "amg_preconditioner.hpp"
 #include "upper_triangle.hpp"
@@ -181,18 +183,31 @@ int block_count(int n) {
   return (n + kBlock - 1) / kBlock;
 }
 
-// q = A p; returns p . q.
+// q = A p; returns p . q. The product's rows are split evenly over the threads, not by blocks:
+// with an odd number of blocks a split by blocks gave one thread a block more (6 of 11 in
+// honami_field, 58 % of the product's samples on one thread). A row's sum does not depend on
+// who computes it, and the dot product is then summed by blocks as dot() sums it.
 double multiply_dot(const RowView& m, const std::vector<double>& p, std::vector<double>& q,
                     std::vector<double>& partial) {
   const int n = m.m->rows(), blocks = block_count(n);
   partial.resize(blocks);
-#pragma omp parallel for schedule(static) if (blocks >= 4)
-  for (int block = 0; block < blocks; ++block) {
-    const int end = std::min(n, (block + 1) * kBlock);
-    multiply_rows(m, p.data(), block * kBlock, end, q.data());
-    double pq = 0.0;
-    for (int i = block * kBlock; i < end; ++i) pq += p[i] * q[i];
-    partial[block] = pq;
+#pragma omp parallel if (blocks >= 4)
+  {
+    const int thread = omp_get_thread_num(), team = omp_get_num_threads();
+    // Whole groups of kRowGroup rows a thread (the last thread takes the remainder).
+    const int groups = n / kRowGroup;
+    const int begin = static_cast<int>(static_cast<std::int64_t>(groups) * thread / team);
+    const int end = static_cast<int>(static_cast<std::int64_t>(groups) * (thread + 1) / team);
+    multiply_rows(m, p.data(), begin * kRowGroup, thread + 1 == team ? n : end * kRowGroup,
+                  q.data());
+#pragma omp barrier
+#pragma omp for schedule(static)
+    for (int block = 0; block < blocks; ++block) {
+      const int block_end = std::min(n, (block + 1) * kBlock);
+      double pq = 0.0;
+      for (int i = block * kBlock; i < block_end; ++i) pq += p[i] * q[i];
+      partial[block] = pq;
+    }
   }
   double total = 0.0;
   for (int block = 0; block < blocks; ++block) total += partial[block];
