@@ -2,8 +2,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
+
+#include <omp.h>
 
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
@@ -11,18 +14,31 @@
 namespace cosim::mps {
 namespace {
 
-// Fluid particles within `radius` of each point, each group in index order, found with one cell
-// grid. Only fluid particles within reach of the points' bounding box enter the grid: walls,
-// dummies and the parked pool are never found, and the points (a plant field, a log) usually
-// cover a small part of the domain. A periodic run keeps the whole period (the seam).
-std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
-                                           const std::vector<Eigen::Vector3d>& positions,
-                                           const std::vector<ParticleKind>& kinds,
-                                           const std::vector<Eigen::Vector3d>& points,
-                                           double radius) {
+// Fluid particles within `radius` of each point: point q's group is index[offset[q] ..
+// offset[q + 1]), in increasing particle index.
+struct PointGroups {
+  std::vector<std::int64_t> offset;
+  std::vector<int> index;
+  std::size_t size(std::size_t q) const {
+    return static_cast<std::size_t>(offset[q + 1] - offset[q]);
+  }
+};
+
+// The groups, found with one cell grid over the fluid particles within reach of the points'
+// bounding box only (copied out in index order): walls, dummies, the parked pool and the water
+// far from the points (a plant field, a log usually covers a small part of the domain) never
+// enter it. A periodic run keeps the whole period (the seam). Each thread queries a contiguous
+// range of points into its own buffer, joined in point order: no allocation per group (the
+// groups' own vectors, allocated and freed by different threads, kept two threads slower than
+// one).
+PointGroups fluid_within(const MpsParameters& p, const std::vector<Eigen::Vector3d>& positions,
+                         const std::vector<ParticleKind>& kinds,
+                         const std::vector<Eigen::Vector3d>& points, double radius) {
   if (!(radius > 0.0)) throw std::invalid_argument("sampling radius must be positive");
-  std::vector<std::vector<int>> result(points.size());
-  if (points.empty()) return result;
+  const int count = static_cast<int>(points.size());
+  PointGroups groups;
+  groups.offset.assign(points.size() + 1, 0);
+  if (points.empty()) return groups;
   double cell = std::max(radius, 2.0 * p.particle_spacing);
   // Periodic runs: at least three cells per period; query() then reaches over several cells.
   if (p.periodic.enabled) cell = std::min(cell, p.periodic.length() / 3.0);
@@ -30,42 +46,57 @@ std::vector<std::vector<int>> fluid_within(const MpsParameters& p,
   for (const auto& x : points) reach.extend(x);
   reach.min().array() -= radius;
   reach.max().array() += radius;
-  const int n = static_cast<int>(positions.size());
-  std::vector<char> include(n, 0);
-  bool any = false;
-  for (int i = 0; i < n; ++i) {
+  std::vector<int> inside;  // particle index of each grid entry, increasing
+  std::vector<Eigen::Vector3d> at;
+  for (int i = 0; i < static_cast<int>(positions.size()); ++i) {
     if (kinds[i] != ParticleKind::fluid) continue;
     Eigen::Vector3d x = positions[i];
     if (p.periodic.enabled) x.x() = reach.min().x();  // any x is within reach across the seam
     if (p.dimension == 2) x.z() = reach.min().z();
-    include[i] = reach.contains(x) ? 1 : 0;
-    any = any || include[i];
+    if (!reach.contains(x)) continue;
+    inside.push_back(i);
+    at.push_back(positions[i]);
   }
-  if (!any) return result;
-  NeighbourGrid grid(p.dimension, bounding_box(positions, p.dimension, cell, &include), cell,
-                     p.periodic);
-  grid.build(positions, &include);
-  const int count = static_cast<int>(points.size());
-  // One buffer a thread and one allocation a group: the groups' growth by push_back, freed later
-  // by another thread, kept two threads slower than one.
-#pragma omp parallel if (count >= 64)
+  if (inside.empty()) return groups;
+  NeighbourGrid grid(p.dimension, bounding_box(at, p.dimension, cell), cell, p.periodic);
+  grid.build(at);
+  const int team = count >= 64 ? std::max(1, omp_get_max_threads()) : 1;
+  std::vector<std::vector<int>> found_by_thread(team);
+#pragma omp parallel num_threads(team)
   {
+    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
+    const int first = static_cast<int>(static_cast<std::int64_t>(count) * thread / threads);
+    const int last = static_cast<int>(static_cast<std::int64_t>(count) * (thread + 1) / threads);
+    std::vector<int>& mine = found_by_thread[thread];
     std::vector<int> found;
-#pragma omp for schedule(dynamic, 16)
-    for (int q = 0; q < count; ++q) {
-      grid.query(positions, points[q], radius, found);
-      std::sort(found.begin(), found.end());
-      result[q].assign(found.begin(), found.end());
+    for (int q = first; q < last; ++q) {
+      grid.query(at, points[q], radius, found);
+      std::sort(found.begin(), found.end());  // grid entries in index order: particles too
+      for (const int k : found) mine.push_back(inside[k]);
+      groups.offset[q + 1] = static_cast<std::int64_t>(found.size());
     }
+#pragma omp barrier
+#pragma omp single
+    {
+      for (int q = 0; q < count; ++q) groups.offset[q + 1] += groups.offset[q];
+      groups.index.resize(static_cast<std::size_t>(groups.offset[count]));
+    }
+    std::copy(mine.begin(), mine.end(), groups.index.begin() + groups.offset[first]);
   }
-  return result;
+  return groups;
 }
 
 }  // namespace
 
 std::vector<std::vector<int>> FluidSystem::fluid_particles_near(
     const std::vector<Eigen::Vector3d>& points, double radius) const {
-  return fluid_within(parameters_, positions_, kinds_, points, radius);
+  const PointGroups groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+  std::vector<std::vector<int>> result(points.size());
+  for (std::size_t q = 0; q < points.size(); ++q) {
+    result[q].assign(groups.index.begin() + groups.offset[q],
+                     groups.index.begin() + groups.offset[q + 1]);
+  }
+  return result;
 }
 
 std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
@@ -78,13 +109,15 @@ std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
   std::vector<Eigen::Vector3d> velocity(points.size(), Eigen::Vector3d::Zero());
   if (water_fraction) water_fraction->assign(points.size(), 0.0);
   for (std::size_t q = 0; q < points.size(); ++q) {
-    const auto& group = groups[q];
-    if (group.empty()) continue;
+    const std::size_t size = groups.size(q);
+    if (size == 0) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int j : group) sum += velocities_[j];
-    velocity[q] = sum / static_cast<double>(group.size());
+    for (std::int64_t k = groups.offset[q]; k < groups.offset[q + 1]; ++k) {
+      sum += velocities_[groups.index[k]];
+    }
+    velocity[q] = sum / static_cast<double>(size);
     if (water_fraction) {
-      (*water_fraction)[q] = std::clamp(static_cast<double>(group.size()) / full, 0.0, 1.0);
+      (*water_fraction)[q] = std::clamp(static_cast<double>(size) / full, 0.0, 1.0);
     }
   }
   return velocity;
@@ -111,15 +144,16 @@ ForceDelivery FluidSystem::set_point_forces(
     const auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
     // Serial accumulation in point order: deterministic.
     for (std::size_t q = 0; q < points.size(); ++q) {
-      const auto& group = groups[q];
-      if (group.empty()) {
+      const std::size_t size = groups.size(q);
+      if (size == 0) {
         ++delivery.undelivered_points;
         delivery.undelivered_force += forces[q];
         continue;
       }
-      const Eigen::Vector3d acceleration =
-          forces[q] / (particle_mass_ * static_cast<double>(group.size()));
-      for (int j : group) external_accelerations_[j] += acceleration;
+      const Eigen::Vector3d acceleration = forces[q] / (particle_mass_ * static_cast<double>(size));
+      for (std::int64_t k = groups.offset[q]; k < groups.offset[q + 1]; ++k) {
+        external_accelerations_[groups.index[k]] += acceleration;
+      }
     }
   }
   return delivery;
