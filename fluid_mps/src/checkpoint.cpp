@@ -6,9 +6,12 @@
 namespace cosim::mps {
 
 void save_checkpoint(const FluidSystem& system, checkpoint::Writer& out) {
-  const MpsState state = system.save_state();
+  save_checkpoint(system.save_state(), system.parameters().dimension, out);
+}
+
+void save_checkpoint(const MpsState& state, int dimension, checkpoint::Writer& out) {
   out.value("fluid.schema", kFluidCheckpointSchema);
-  out.value("fluid.dimension", system.parameters().dimension);
+  out.value("fluid.dimension", dimension);
   out.vector("fluid.positions", state.positions);
   out.vector("fluid.velocities", state.velocities);
   out.vector("fluid.pressures", state.pressures);

@@ -14,6 +14,7 @@ namespace cosim::mps {
 inline constexpr std::uint32_t kFluidCheckpointSchema = 2;  // 2: the pressure set-up in reuse
 
 void save_checkpoint(const FluidSystem& system, checkpoint::Writer& out);
+void save_checkpoint(const MpsState& state, int dimension, checkpoint::Writer& out);
 // Throws checkpoint::Error naming the file and record when the state does not fit `parameters`
 // (another dimension) or is inconsistent.
 MpsState load_checkpoint(const checkpoint::Reader& in);
