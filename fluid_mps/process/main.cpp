@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -24,6 +25,10 @@
 namespace {
 
 using namespace cosim;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings& scene) {
   if (parameters.dimension == 3) return mps::build_scene_3d(parameters, scene);  // scene_3d.hpp
@@ -159,9 +164,11 @@ class FluidProcess final : public coupler::Solver {
     if (fishway_) fishway_->observe(*system_, open_boundaries_.get());
     if (overfall_) overfall_->observe(*system_, *open_boundaries_);
     for (const auto& solid : solids) {
+      const auto sampling = std::chrono::steady_clock::now();
       const auto velocity =
           system_->sample_velocity(solid.positions, config_.sample_radius, &water_);
       system_->sample_surface(solid.positions, config_.sample_radius, surface_);
+      hook_seconds_ += seconds_since(sampling);
       link_.publish_samples(solid.name, velocity, water_, surface_);
       if (link_.resolves(solid.name)) link_.publish_fluid_load(solid.name, blade_load(window));
     }
@@ -193,6 +200,18 @@ class FluidProcess final : public coupler::Solver {
       // Above kMaximumSolidFraction the fluid was given back some of the solids' volume.
       info["largest_solid_fraction"] = largest_solid_fraction_;
     }
+    // Where this process's compute went (wall seconds of this run; not carried over a restart).
+    const mps::StageSeconds& t = stage_seconds_;
+    info["stage_seconds"] = {{"search", t.search},
+                             {"explicit", t.explicit_part},
+                             {"collision", t.collision},
+                             {"density", t.density},
+                             {"assembly", t.assembly},
+                             {"pressure_setup", t.pressure_setup},
+                             {"pressure_solve", t.pressure_solve},
+                             {"correction", t.correction},
+                             {"finish", t.finish},
+                             {"coupling_hooks", hook_seconds_}};
     info["steps"] = steps_;
     info["mean_pcg_iterations"] = steps_ > 0 ? double(pcg_iterations_) / steps_ : 0.0;
     info["most_pcg_iterations"] = most_pcg_iterations_;
@@ -415,8 +434,10 @@ class FluidProcess final : public coupler::Solver {
       // A resolved plant acts through its wall particles; it reports no drag to react to.
       if (!link_.resolves(solid.name)) forces.emplace_back(solid.positions, solid.reaction);
     }
+    const auto forcing = std::chrono::steady_clock::now();
     const auto delivery = system_->set_point_forces(forces, config_.sample_radius);
     if (config_.displacement_radius > 0.0) set_displaced_volumes(solids);
+    hook_seconds_ += seconds_since(forcing);
     undelivered_ += delivery.undelivered_force * window.dt;
     const int pieces =
         std::max(1, static_cast<int>(std::ceil(window.dt / system_->stable_dt() - 1e-9)));
@@ -445,6 +466,7 @@ class FluidProcess final : public coupler::Solver {
           budget_sources_ += system_->total_fluid_momentum() - before;
         }
       }
+      stage_seconds_ += step.stage_seconds;
       pcg_iterations_ += step.pcg_iterations;
       most_pcg_iterations_ = std::max(most_pcg_iterations_, step.pcg_iterations);
     }
@@ -454,6 +476,8 @@ class FluidProcess final : public coupler::Solver {
 
   mps::FluidConfig config_;
   std::unique_ptr<mps::FluidSystem> system_;
+  mps::StageSeconds stage_seconds_;  // summed over the steps of this run
+  double hook_seconds_ = 0.0;        // point forces, displaced volumes, sampling
   coupler::FlowLink link_;
   output::PointSeriesWriter writer_;
   std::filesystem::path output_dir_;

@@ -2,6 +2,7 @@
 // of stages: predict, collide, measure density, assemble and solve the pressure equation,
 // correct. All stages share one pair list (update_neighbours) and the work arrays of the system.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -80,13 +81,31 @@ StepReport FluidSystem::step(double dt) {
 
   StepReport report;
   report.dt = dt;
+  StageSeconds& seconds = report.stage_seconds;
+  // Each stage's wall time, less the neighbour search it ran (update_neighbours books that).
+  auto mark = std::chrono::steady_clock::now();
+  double searched = 0.0;
+  auto lap = [&](double& stage) {
+    const auto now = std::chrono::steady_clock::now();
+    stage += std::chrono::duration<double>(now - mark).count() - (seconds.search - searched);
+    searched = seconds.search;
+    mark = now;
+  };
   predict(c, report);
+  lap(seconds.explicit_part);
   collide(c, report);
+  lap(seconds.collision);
   measure_density(c, report);
+  lap(seconds.density);
   assemble_pressure_equation(c);
+  lap(seconds.assembly);
   solve_pressure(report);
+  lap(seconds.pressure_solve);
+  seconds.pressure_solve -= report.stage_seconds.pressure_setup;  // set by solve_pressure
   correct_with_pressure_gradient(c, report);
+  lap(seconds.correction);
   finish_step(c, report);
+  lap(seconds.finish);
   return report;
 }
 
@@ -378,6 +397,7 @@ void FluidSystem::solve_pressure(StepReport& report) {
       pressure_solver_.solve(matrix_, rhs_, solution_, parameters_.pcg_tolerance,
                              parameters_.pcg_max_iterations, amg ? &hierarchy_matrix_ : nullptr);
   report.pcg_iterations = pcg.iterations;
+  report.stage_seconds.pressure_setup = pcg.setup_seconds;
   report.pcg_residual = pcg.relative_residual;
   report.pcg_converged = pcg.converged;
   // Negative pressures are clamped to zero: MPS has no tension (standard practice).

@@ -3,6 +3,7 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include <omp.h>
@@ -440,6 +441,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
   if (chosen != Preconditioner::aggregation) setup_kept_ = false;
   if (chosen == Preconditioner::aggregation) {
     if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
+    const auto setup_start = std::chrono::steady_clock::now();
     AggregationPreconditioner& two_level = aggregation_->two_level;
     const bool reused = setup_kept_ && row_keys_ && setup_age_ + 1 < setup_reuse_ &&
                         last_iterations_ <= base_iterations_ + kSetupReuseMargin &&
@@ -451,21 +453,29 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
       if (setup_kept_) two_level.remember_keys(*row_keys_, key_count_);
       setup_age_ = 0;
     }
-    const PcgResult result =
+    const double setup_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count();
+    PcgResult result =
         conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
                             [&](const std::vector<double>& r, std::vector<double>& z) {
                               aggregation_->two_level.apply(r, z);
                             });
     if (!reused) base_iterations_ = result.iterations;
     last_iterations_ = result.iterations;
+    result.setup_seconds = setup_seconds;
     return result;
   }
   if (chosen == Preconditioner::amg) {
     if (!amg_) amg_ = std::make_unique<Amg>();
+    const auto setup_start = std::chrono::steady_clock::now();
     amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
-    return conjugate_gradients(
+    const double setup_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count();
+    PcgResult result = conjugate_gradients(
         matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
         [&](const std::vector<double>& r, std::vector<double>& z) { amg_->cycle.apply(r, z); });
+    result.setup_seconds = setup_seconds;
+    return result;
   }
   invert_diagonal(matrix, inverse_diagonal_);
   const std::vector<double>& inverse_diagonal = inverse_diagonal_;

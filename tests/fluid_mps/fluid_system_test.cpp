@@ -5,6 +5,7 @@
 #include <limits>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -362,6 +363,39 @@ TEST(MpsFluidSystem, CheckpointRefusesABadPressureSetUp) {
               std::string::npos)
         << error.what();
   }
+}
+
+// The stages' wall seconds are booked once each: none negative, and together no more than the
+// step's own wall time; a step that rebuilds its pair list books search time, and the
+// aggregation's set-up is booked apart from the CG.
+TEST(MpsFluidSystem, StageSecondsAddUpToTheStep) {
+  MpsParameters p = dam_parameters(20);
+  p.pressure_preconditioner = MpsParameters::PressurePreconditioner::aggregation;
+  FluidSystem system(p, dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715));
+  bool searched = false, set_up = false;
+  for (int k = 0; k < 400 && !(searched && set_up && k >= 30); ++k) {
+    const auto start = std::chrono::steady_clock::now();
+    const StepReport report = system.step(system.stable_dt());
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const StageSeconds& t = report.stage_seconds;
+    const double stages[] = {t.search,         t.explicit_part, t.collision,
+                             t.density,        t.assembly,      t.pressure_setup,
+                             t.pressure_solve, t.correction,    t.finish};
+    double sum = 0.0;
+    for (const double stage : stages) {
+      EXPECT_GE(stage, 0.0);
+      sum += stage;
+    }
+    EXPECT_LE(sum, wall * (1.0 + 1e-9));
+    if (report.neighbour_searches > 0) {
+      EXPECT_GT(t.search, 0.0);
+      searched = true;
+    }
+    set_up = set_up || t.pressure_setup > 0.0;
+  }
+  EXPECT_TRUE(searched);
+  EXPECT_TRUE(set_up);
 }
 
 // Parallel loops gather per particle and reduce in fixed blocks: thread count must not matter.

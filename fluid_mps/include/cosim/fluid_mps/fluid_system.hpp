@@ -14,8 +14,25 @@
 
 namespace cosim::mps {
 
+// Wall seconds of the stages of a step (FluidSystem::step), for a run's profile: where the time
+// goes, not a result (they differ between runs). The neighbour search is counted apart from the
+// stages it runs in.
+struct StageSeconds {
+  double search = 0.0;         // pair lists and the particles' reordering
+  double explicit_part = 0.0;  // viscosity, gravity, point forces
+  double collision = 0.0;
+  double density = 0.0;         // number densities, surface, divergence
+  double assembly = 0.0;        // the pressure equation
+  double pressure_setup = 0.0;  // the preconditioner's set-up
+  double pressure_solve = 0.0;  // conjugate gradients
+  double correction = 0.0;      // pressure gradient, shifting
+  double finish = 0.0;          // state out, stability check
+  StageSeconds& operator+=(const StageSeconds& o);
+};
+
 struct StepReport {
   double dt = 0.0;
+  StageSeconds stage_seconds;
   int pcg_iterations = 0;
   double pcg_residual = 0.0;
   bool pcg_converged = true;  // false: max iterations hit; the step still completes

@@ -23,6 +23,7 @@ struct PcgResult {
   int iterations = 0;
   double relative_residual = 0.0;  // |b - A x| / |b| (recursive residual)
   bool converged = false;
+  double setup_seconds = 0.0;  // wall time of the preconditioner's set-up (PressureSolver)
 };
 
 // jacobi: diagonal scaling; iterations grow about as the square root of the unknowns.
