@@ -48,12 +48,13 @@ enum class Preconditioner { jacobi, incomplete_cholesky, amg, automatic, aggrega
 // at 3 200 unknowns (a/l0 = 8), 1.03 at 8 100 (12), 0.78 at 16 100 (16). AMG (hypre) took
 // 1.5-2.2 times aggregation's step at every 2D size, so automatic no longer takes it.
 constexpr int kAggregationFromUnknowns = 1000;
-// A reused aggregation set-up is rebuilt once a solve takes more than this many CG iterations
-// beyond its first solve. On the dam break (a/l0 = 80) and the 3D column (a/l0 = 12) reuse over
-// up to 10 solves raised the mean iterations from 25.2 to 26.3 and 23.4 to 23.7, and cut the
-// one-thread step by 9-17 % and 8-9 % (docs/performance.md).
-constexpr int kSetupReuseMargin = 2;
 constexpr int kAggregationFromUnknowns3d = 10000;
+
+// A reused aggregation set-up is rebuilt once a solve takes more than this many CG iterations
+// beyond its first solve. On the dam break (a/l0 = 80) and the 3D column (a/l0 = 16) reuse over
+// up to 10 solves raised the mean iterations from 25.2 to 26.3 and 24.3 to 25.1, and cut the
+// one-thread step by 8-13 % and 8-9 % (docs/performance.md).
+constexpr int kSetupReuseMargin = 2;
 
 // What a pressure solver carries from one solve to the next that changes its results: the
 // aggregation's set-up while it is reused (PressureSolver::set_setup_reuse). Saved with the
