@@ -30,12 +30,20 @@ void write_array(std::ofstream& out, const std::vector<T>& values) {
             static_cast<std::streamsize>(values.size() * sizeof(T)));
 }
 
+// An array of at most `largest` values, and no more than the file still holds (a damaged count
+// is refused before anything is allocated for it).
 template <class T>
 void read_array(std::ifstream& in, std::vector<T>& values, std::uint64_t largest,
                 const std::string& path) {
   std::uint64_t count = 0;
   read(in, count, path);
-  if (count > largest) throw std::runtime_error("load_state: bad pressure set-up in " + path);
+  const auto here = in.tellg();
+  in.seekg(0, std::ios::end);
+  const auto left = static_cast<std::uint64_t>(in.tellg() - here);
+  in.seekg(here);
+  if (count > largest || count > left / sizeof(T)) {
+    throw std::runtime_error("load_state: bad pressure set-up in " + path);
+  }
   values.resize(count);
   in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(count * sizeof(T)));
   if (!in) throw std::runtime_error("load_state: truncated file " + path);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/checkpoint.hpp"
@@ -342,6 +343,43 @@ TEST(MpsFluidSystem, CheckpointCarriesThePressureSetUp) {
   }
   EXPECT_TRUE(same_bits(straight, restarted));
   EXPECT_FALSE(same_bits(straight, fresh));
+}
+
+// A restart file whose set-up section claims more values than the file holds is refused before
+// anything is allocated for them, naming the file.
+TEST(MpsFluidSystem, RestartFileWithADamagedSetUpIsRefused) {
+  MpsParameters p = dam_parameters(8);
+  p.pressure_preconditioner = MpsParameters::PressurePreconditioner::aggregation;
+  FluidSystem system(p, dam_break(p, 0.05715, 2 * 0.05715, 4 * 0.05715, 3 * 0.05715));
+  system.step(system.stable_dt());
+  const PressureSetupState setup = system.save_state().pressure_setup;
+  ASSERT_TRUE(setup.kept);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "cosim_fluid_mps_damaged_setup.bin").string();
+  save_state(system, path);
+  {
+    // Header (8 + 4), count, time, step, then per particle 7 doubles and an int; then the
+    // set-up's flag, its four counts, aggregate_of_key (a length and the ints) and the length of
+    // the coarse rows, damaged to count^2: a bound the coarse matrix allows, but more than the
+    // file holds.
+    const std::uint64_t n = static_cast<std::uint64_t>(system.particle_count());
+    const std::uint64_t at =
+        12 + 24 + n * (7 * 8 + 4) + 1 + 16 + 8 + 4 * setup.aggregate_of_key.size();
+    const std::uint64_t claimed =
+        static_cast<std::uint64_t>(setup.aggregate_count) * setup.aggregate_count;
+    ASSERT_GT(claimed * sizeof(int), std::filesystem::file_size(path) - at);
+    std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(static_cast<std::streamoff>(at));
+    file.write(reinterpret_cast<const char*>(&claimed), sizeof(claimed));
+  }
+  try {
+    load_state(path);
+    FAIL() << "a damaged set-up was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("pressure set-up"), std::string::npos) << error.what();
+  }
+  std::remove(path.c_str());
 }
 
 // A set-up record that does not fit is refused, naming it.
