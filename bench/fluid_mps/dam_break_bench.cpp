@@ -31,6 +31,20 @@ void apply_environment(cosim::mps::MpsParameters& p) {
   }
 }
 
+// Milliseconds a step of each stage (StepReport::stage_seconds), as counters beside the step's
+// time: where a size's time goes.
+void count_stages(benchmark::State& state, const cosim::mps::StageSeconds& t, long steps) {
+  const double per_step = 1e3 / static_cast<double>(steps);
+  state.counters["ms_search"] = t.search * per_step;
+  state.counters["ms_explicit"] = t.explicit_part * per_step;
+  state.counters["ms_collision"] = t.collision * per_step;
+  state.counters["ms_density"] = t.density * per_step;
+  state.counters["ms_assembly"] = t.assembly * per_step;
+  state.counters["ms_pressure_setup"] = t.pressure_setup * per_step;
+  state.counters["ms_pressure_solve"] = t.pressure_solve * per_step;
+  state.counters["ms_correction"] = t.correction * per_step;
+}
+
 void BM_DamBreakStep(benchmark::State& state) {
   using namespace cosim::mps;
   const double a = 0.05715;
@@ -44,8 +58,10 @@ void BM_DamBreakStep(benchmark::State& state) {
   // Skip the start-up so the column is collapsing (typical PCG work) when timing begins.
   while (system.time() < 0.05) system.step(system.stable_dt());
   long pcg_iterations = 0, steps = 0, searches = 0, unknowns = 0;
+  StageSeconds stages;
   for (auto _ : state) {
     const StepReport report = system.step(system.stable_dt());
+    stages += report.stage_seconds;
     pcg_iterations += report.pcg_iterations;
     searches += report.neighbour_searches;
     unknowns += report.pressure_unknowns;
@@ -57,6 +73,7 @@ void BM_DamBreakStep(benchmark::State& state) {
   state.counters["mean_pcg_iterations"] = static_cast<double>(pcg_iterations) / steps;
   state.counters["searches_per_step"] = static_cast<double>(searches) / steps;
   state.counters["mean_unknowns"] = static_cast<double>(unknowns) / steps;
+  count_stages(state, stages, steps);
 }
 
 // Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi, 2 incomplete Cholesky, 3 automatic,
@@ -89,8 +106,10 @@ void BM_Column3dStep(benchmark::State& state) {
   FluidSystem system(p, dam_break_3d(p, a, 2.0 * a, 4.0 * a, a, 2.0 * a));
   while (system.time() < 0.03) system.step(system.stable_dt());
   long pcg_iterations = 0, steps = 0, searches = 0, unknowns = 0;
+  StageSeconds stages;
   for (auto _ : state) {
     const StepReport report = system.step(system.stable_dt());
+    stages += report.stage_seconds;
     pcg_iterations += report.pcg_iterations;
     searches += report.neighbour_searches;
     unknowns += report.pressure_unknowns;
@@ -102,6 +121,7 @@ void BM_Column3dStep(benchmark::State& state) {
   state.counters["mean_pcg_iterations"] = static_cast<double>(pcg_iterations) / steps;
   state.counters["searches_per_step"] = static_cast<double>(searches) / steps;
   state.counters["mean_unknowns"] = static_cast<double>(unknowns) / steps;
+  count_stages(state, stages, steps);
 }
 
 // Arguments: a / l0, preconditioner (0 AMG, 1 Jacobi, 4 aggregation).
