@@ -36,7 +36,7 @@ PressureSetupState load_pressure_setup(const checkpoint::Reader& in, std::size_t
   PressureSetupState setup;
   if (!in.has("fluid.pressure_setup.counts")) return setup;
   const auto counts = in.vector<std::int32_t>("fluid.pressure_setup.counts");
-  if (counts.size() != 4 || counts[0] < 0 || counts[3] <= 0) {
+  if (counts.size() != 4) {
     in.fail("fluid.pressure_setup.counts", "is not an age, two iteration counts and a size");
   }
   setup.kept = true;
@@ -45,28 +45,11 @@ PressureSetupState load_pressure_setup(const checkpoint::Reader& in, std::size_t
   setup.last_iterations = counts[2];
   setup.aggregate_count = counts[3];
   setup.aggregate_of_key = in.vector<int>("fluid.pressure_setup.aggregate_of_key");
-  if (setup.aggregate_of_key.size() > particles) {
-    in.fail("fluid.pressure_setup.aggregate_of_key", "has more keys than there are particles");
-  }
-  for (const int a : setup.aggregate_of_key) {
-    if (a < -1 || a >= setup.aggregate_count) {
-      in.fail("fluid.pressure_setup.aggregate_of_key", "names an aggregate that does not exist");
-    }
-  }
   setup.coarse_row = in.vector<int>("fluid.pressure_setup.coarse_row");
   setup.coarse_column = in.vector<int>("fluid.pressure_setup.coarse_column");
   setup.coarse_value = in.vector<double>("fluid.pressure_setup.coarse_value");
-  const std::size_t entries = setup.coarse_value.size();
-  if (setup.coarse_row.size() != entries || setup.coarse_column.size() != entries) {
-    in.fail("fluid.pressure_setup.coarse_row",
-            "and the coarse columns and values differ in length");
-  }
-  for (std::size_t k = 0; k < entries; ++k) {
-    const int row = setup.coarse_row[k], column = setup.coarse_column[k];
-    if (column < 0 || row < column || row >= setup.aggregate_count) {
-      in.fail("fluid.pressure_setup.coarse_row",
-              "holds an entry outside the coarse matrix's lower triangle");
-    }
+  if (const auto problem = find_setup_problem(setup, particles)) {
+    in.fail("fluid.pressure_setup." + problem->field, problem->what);
   }
   return setup;
 }

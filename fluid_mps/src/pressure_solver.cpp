@@ -409,6 +409,32 @@ UpperTriangle* PressureSolver::upper() {
   return upper_.get();
 }
 
+std::optional<SetupProblem> find_setup_problem(const PressureSetupState& state,
+                                               std::size_t particles) {
+  if (state.age < 0) return SetupProblem{"counts", "holds a negative age"};
+  if (state.aggregate_count <= 0) return SetupProblem{"counts", "holds no aggregate"};
+  if (state.aggregate_of_key.size() > particles) {
+    return SetupProblem{"aggregate_of_key", "has more keys than there are particles"};
+  }
+  for (const int a : state.aggregate_of_key) {
+    if (a < -1 || a >= state.aggregate_count) {
+      return SetupProblem{"aggregate_of_key", "names an aggregate that does not exist"};
+    }
+  }
+  const std::size_t entries = state.coarse_value.size();
+  if (state.coarse_row.size() != entries || state.coarse_column.size() != entries) {
+    return SetupProblem{"coarse_row", "and the coarse columns and values differ in length"};
+  }
+  for (std::size_t k = 0; k < entries; ++k) {
+    const int row = state.coarse_row[k], column = state.coarse_column[k];
+    if (column < 0 || row < column || row >= state.aggregate_count) {
+      return SetupProblem{"coarse_row",
+                          "holds an entry outside the coarse matrix's lower triangle"};
+    }
+  }
+  return std::nullopt;
+}
+
 PressureSetupState PressureSolver::setup_state() const {
   PressureSetupState state;
   if (!setup_kept_ || !aggregation_) return state;

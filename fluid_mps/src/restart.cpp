@@ -62,8 +62,8 @@ void write_setup(std::ofstream& out, const PressureSetupState& setup) {
   write_array(out, setup.coarse_value);
 }
 
-// The set-up is checked where it is used (PressureSolver::restore_setup refactorises it); here
-// only that the arrays fit the file and each other.
+// The set-up after the particles; each array no longer than the file holds, and the whole
+// consistent (find_setup_problem).
 void read_setup(std::ifstream& in, PressureSetupState& setup, std::uint64_t particles,
                 const std::string& path) {
   std::uint8_t kept = 0;
@@ -81,15 +81,10 @@ void read_setup(std::ifstream& in, PressureSetupState& setup, std::uint64_t part
   read_array(in, setup.coarse_row, count * count, path);
   read_array(in, setup.coarse_column, count * count, path);
   read_array(in, setup.coarse_value, count * count, path);
-  const std::size_t entries = setup.coarse_value.size();
-  bool fits =
-      counts[3] > 0 && setup.coarse_row.size() == entries && setup.coarse_column.size() == entries;
-  for (const int a : setup.aggregate_of_key) fits = fits && a >= -1 && a < counts[3];
-  for (std::size_t k = 0; fits && k < entries; ++k) {
-    fits = setup.coarse_column[k] >= 0 && setup.coarse_row[k] >= setup.coarse_column[k] &&
-           setup.coarse_row[k] < counts[3];
+  if (const auto problem = find_setup_problem(setup, particles)) {
+    throw std::runtime_error("load_state: bad pressure set-up in " + path + ": " + problem->field +
+                             " " + problem->what);
   }
-  if (!fits) throw std::runtime_error("load_state: bad pressure set-up in " + path);
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace cosim::mps {
@@ -68,6 +70,17 @@ struct PressureSetupState {
   std::vector<int> coarse_row, coarse_column;  // A_c's lower triangle, column by column
   std::vector<double> coarse_value;
 };
+
+// What is wrong with a set-up state read from a file, if anything: `field` names the part as the
+// files name it (counts: the age and the aggregate count; aggregate_of_key; coarse_row), `what`
+// says how. Checked: a non-negative age,
+// at least one aggregate, at most `particles` keys, each key's aggregate in [-1, count), the
+// coarse arrays of one length, every coarse entry in the lower triangle.
+struct SetupProblem {
+  std::string field, what;
+};
+std::optional<SetupProblem> find_setup_problem(const PressureSetupState& state,
+                                               std::size_t particles);
 
 // y = A x; each row summed in the order of its entries (the bits of the plain loop). With
 // `single_precision`, each value is first rounded to float (the bits of the plain loop over
