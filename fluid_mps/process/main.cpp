@@ -4,7 +4,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -25,10 +24,6 @@
 namespace {
 
 using namespace cosim;
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 mps::ParticleSet build_scene(mps::MpsParameters& parameters, mps::SceneSettings& scene) {
   if (parameters.dimension == 3) return mps::build_scene_3d(parameters, scene);  // scene_3d.hpp
@@ -164,11 +159,11 @@ class FluidProcess final : public coupler::Solver {
     if (fishway_) fishway_->observe(*system_, open_boundaries_.get());
     if (overfall_) overfall_->observe(*system_, *open_boundaries_);
     for (const auto& solid : solids) {
-      const auto sampling = std::chrono::steady_clock::now();
+      const auto sampling = mps::StageClock::now();
       const auto velocity =
           system_->sample_velocity(solid.positions, config_.sample_radius, &water_);
       system_->sample_surface(solid.positions, config_.sample_radius, surface_);
-      hook_seconds_ += seconds_since(sampling);
+      hook_seconds_ += mps::seconds_since(sampling);
       link_.publish_samples(solid.name, velocity, water_, surface_);
       if (link_.resolves(solid.name)) link_.publish_fluid_load(solid.name, blade_load(window));
     }
@@ -434,10 +429,10 @@ class FluidProcess final : public coupler::Solver {
       // A resolved plant acts through its wall particles; it reports no drag to react to.
       if (!link_.resolves(solid.name)) forces.emplace_back(solid.positions, solid.reaction);
     }
-    const auto forcing = std::chrono::steady_clock::now();
+    const auto forcing = mps::StageClock::now();
     const auto delivery = system_->set_point_forces(forces, config_.sample_radius);
     if (config_.displacement_radius > 0.0) set_displaced_volumes(solids);
-    hook_seconds_ += seconds_since(forcing);
+    hook_seconds_ += mps::seconds_since(forcing);
     undelivered_ += delivery.undelivered_force * window.dt;
     const int pieces =
         std::max(1, static_cast<int>(std::ceil(window.dt / system_->stable_dt() - 1e-9)));

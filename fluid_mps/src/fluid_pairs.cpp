@@ -2,7 +2,6 @@
 // with a skin, particles reordered along its cells for memory locality, and the pairs within
 // the stage radii at the current positions.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #ifdef __SSE2__
@@ -62,14 +61,11 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
                                     bool reorder) {
   const MpsParameters& p = parameters_;
   const int n = particle_count();
-  const auto start = std::chrono::steady_clock::now();
   struct Book {  // the search's wall time into the report, however the function returns
-    std::chrono::steady_clock::time_point start;
+    StageClock::time_point start;
     double& into;
-    ~Book() {
-      into += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
-  } book{start, report.stage_seconds.search};
+    ~Book() { into += seconds_since(start); }
+  } book{StageClock::now(), report.stage_seconds.search};
   const double skin = kSkinOverL0 * p.particle_spacing;
   // Two particles that each moved less than half the skin are still listed if now in reach.
   if (neighbours_valid_ && static_cast<int>(search_positions_.size()) == n) {

@@ -2,7 +2,6 @@
 // of stages: predict, collide, measure density, assemble and solve the pressure equation,
 // correct. All stages share one pair list (update_neighbours) and the work arrays of the system.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -83,11 +82,11 @@ StepReport FluidSystem::step(double dt) {
   report.dt = dt;
   StageSeconds& seconds = report.stage_seconds;
   // Each stage's wall time, less the neighbour search it ran (update_neighbours books that).
-  auto mark = std::chrono::steady_clock::now();
+  auto mark = StageClock::now();
   double searched = 0.0;
   auto lap = [&](double& stage) {
-    const auto now = std::chrono::steady_clock::now();
-    stage += std::chrono::duration<double>(now - mark).count() - (seconds.search - searched);
+    const auto now = StageClock::now();
+    stage += seconds_between(mark, now) - (seconds.search - searched);
     searched = seconds.search;
     mark = now;
   };
@@ -101,7 +100,7 @@ StepReport FluidSystem::step(double dt) {
   lap(seconds.assembly);
   solve_pressure(report);
   lap(seconds.pressure_solve);
-  seconds.pressure_solve -= report.stage_seconds.pressure_setup;  // set by solve_pressure
+  seconds.pressure_solve -= seconds.pressure_setup;  // set by solve_pressure
   correct_with_pressure_gradient(c, report);
   lap(seconds.correction);
   finish_step(c, report);

@@ -233,17 +233,4 @@ MpsState FluidSystem::save_state() const {
       positions_, velocities_, pressures_, kinds_, time_, step_, pressure_solver_.setup_state()};
 }
 
-StageSeconds& StageSeconds::operator+=(const StageSeconds& o) {
-  search += o.search;
-  explicit_part += o.explicit_part;
-  collision += o.collision;
-  density += o.density;
-  assembly += o.assembly;
-  pressure_setup += o.pressure_setup;
-  pressure_solve += o.pressure_solve;
-  correction += o.correction;
-  finish += o.finish;
-  return *this;
-}
-
 }  // namespace cosim::mps

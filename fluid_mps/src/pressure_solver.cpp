@@ -3,13 +3,13 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include <omp.h>
 
 #include "aggregation_preconditioner.hpp"
 #include "amg_preconditioner.hpp"
+#include "cosim/fluid_mps/stage_seconds.hpp"
 #include "upper_triangle.hpp"
 
 namespace cosim::mps {
@@ -180,12 +180,6 @@ PcgResult solve_incomplete_cholesky(const SparseRows& matrix, const std::vector<
 // The Krylov loop below fuses the vector passes of one iteration into three parallel loops over
 // the blocks of dot(): each block's partial sums are accumulated in item order and the blocks
 // are summed in order, exactly as dot() does, so the bits are those of the plain loop.
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 int block_count(int n) {
   return (n + kBlock - 1) / kBlock;
 }
@@ -473,7 +467,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
   if (chosen != Preconditioner::aggregation) setup_kept_ = false;
   if (chosen == Preconditioner::aggregation) {
     if (!aggregation_) aggregation_ = std::make_unique<Aggregation>();
-    const auto setup_start = Clock::now();
+    const auto setup_start = StageClock::now();
     AggregationPreconditioner& two_level = aggregation_->two_level;
     const bool reused = setup_kept_ && row_keys_ && setup_age_ + 1 < setup_reuse_ &&
                         last_iterations_ <= base_iterations_ + kSetupReuseMargin &&
@@ -498,7 +492,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
   }
   if (chosen == Preconditioner::amg) {
     if (!amg_) amg_ = std::make_unique<Amg>();
-    const auto setup_start = Clock::now();
+    const auto setup_start = StageClock::now();
     amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
     const double setup_seconds = seconds_since(setup_start);
     PcgResult result = conjugate_gradients(

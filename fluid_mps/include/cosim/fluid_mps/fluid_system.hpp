@@ -11,24 +11,9 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
 #include "cosim/fluid_mps/pressure_solver.hpp"
+#include "cosim/fluid_mps/stage_seconds.hpp"
 
 namespace cosim::mps {
-
-// Wall seconds of the stages of a step (FluidSystem::step), for a run's profile: where the time
-// goes, not a result (they differ between runs). The neighbour search is counted apart from the
-// stages it runs in.
-struct StageSeconds {
-  double search = 0.0;         // pair lists and the particles' reordering
-  double explicit_part = 0.0;  // viscosity, gravity, point forces
-  double collision = 0.0;
-  double density = 0.0;         // number densities, surface, divergence
-  double assembly = 0.0;        // the pressure equation
-  double pressure_setup = 0.0;  // the preconditioner's set-up
-  double pressure_solve = 0.0;  // conjugate gradients
-  double correction = 0.0;      // pressure gradient, shifting
-  double finish = 0.0;          // state out, stability check
-  StageSeconds& operator+=(const StageSeconds& o);
-};
 
 struct StepReport {
   double dt = 0.0;
