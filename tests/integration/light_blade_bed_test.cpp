@@ -83,8 +83,12 @@ TEST(LightBladeBed, SerialExplicitDivergesAtCoarseWindowsAndCompletesAtFineOnes)
 // at most 50 iterations. The blade flaps on the bed after the surge, so its tip at one instant
 // differs between explicit runs of 0.5, 0.25 and 0.125 ms windows by up to 15 mm in height; its
 // mean over 0.15-0.3 s differs by 2.3 mm in height and 0.5 mm streamwise (docs/validation.md).
-// The implicit run's mean must lie within that spread of the 0.5 ms explicit run's in height,
-// within twice it streamwise. Measured over 16 starting factors 0.008-0.0125 (December 2026,
+// Round-off alone moves it as much: the 0.5 ms run's mean reads 10.5-11.9 mm high with the
+// plants' Newton tolerance at 1e-10, 1e-11 or 1e-12 and their Jacobian kept over a window's
+// sub-steps or not, and the nine explicit runs of that ensemble (0.5, 0.25, 0.125 ms) span
+// 8.2-11.9 mm high and 51.7-52.2 mm downstream (December 2026). The implicit run's mean must lie
+// within that spread (3.7 mm) of the 0.5 ms explicit run's in height, within twice the
+// streamwise spread of the windows. Measured over 16 starting factors 0.008-0.0125 (December 2026,
 // only the positions accelerated and the window-mean velocity handed on): every run completes,
 // 15 with no window at the limit and one with one, 4.3-5.2 iterations a window, means
 // 6.8-12.0 mm high and 51.6-52.8 mm downstream against 10.5 / 52.2 mm; from 0.01: none at the
@@ -110,7 +114,7 @@ TEST(LightBladeBedSlow, SerialImplicitAtCoarseWindowsMatchesTheFinerExplicitRun)
   EXPECT_LT(implicit["iterations_mean"].get<double>(), 8.0);
   const auto [height, streamwise] = mean_tip(run_folder_of(implicit_run), 0.15, 0.3);
   const auto [reference_height, reference_streamwise] = mean_tip(run_folder_of(fine), 0.15, 0.3);
-  EXPECT_NEAR(height, reference_height, 2.3e-3);
+  EXPECT_NEAR(height, reference_height, 3.7e-3);
   EXPECT_NEAR(streamwise, reference_streamwise, 1.0e-3);
 }
 

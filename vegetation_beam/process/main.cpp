@@ -187,6 +187,7 @@ class VegetationProcess final : public coupler::Solver {
     most_newton_iterations_ = std::max(most_newton_iterations_, step.max_newton_iterations);
     newton_restarts_ += step.newton_restarts;
     cutbacks_ += step.cutbacks;
+    factorizations_ += step.factorizations;
     last_drag_impulse_.setZero();
     for (const auto& drag : field_.window_mean_drag()) last_drag_impulse_ += drag * window.dt;
     drag_impulse_ += last_drag_impulse_;
@@ -219,6 +220,7 @@ class VegetationProcess final : public coupler::Solver {
     info["most_newton_iterations"] = most_newton_iterations_;
     info["newton_restarts"] = newton_restarts_;
     info["substep_cutbacks"] = cutbacks_;
+    info["jacobian_factorizations"] = factorizations_;
     info["static_solve_iterations"] = start_.static_iterations;
     info["kinetic_energy"] = field_.kinetic_energy();
     // Impulse the fluid gave the plants; the last window's reaches the fluid after the run.
@@ -242,6 +244,7 @@ class VegetationProcess final : public coupler::Solver {
     out.vector("vegetation_process.water", water_);
     out.value("vegetation_process.next_tip", next_tip_);
     out.value("vegetation_process.node_substeps", node_substeps_);
+    out.value("vegetation_process.jacobian_factorizations", factorizations_);
     const int counts[4] = {most_substeps_, most_newton_iterations_, newton_restarts_, cutbacks_};
     out.bytes("vegetation_process.counts", counts, sizeof(int), 4);
     out.value("vegetation_process.drag_impulse", drag_impulse_);
@@ -256,6 +259,10 @@ class VegetationProcess final : public coupler::Solver {
     in.vector_into("vegetation_process.water", water_);
     next_tip_ = in.value<double>("vegetation_process.next_tip");
     node_substeps_ = in.value<int64_t>("vegetation_process.node_substeps");
+    // Checkpoints written before the count was kept restart it from zero.
+    factorizations_ = in.has("vegetation_process.jacobian_factorizations")
+                          ? in.value<int64_t>("vegetation_process.jacobian_factorizations")
+                          : 0;
     const auto counts = in.vector<int>("vegetation_process.counts");
     if (counts.size() != 4) in.fail("vegetation_process.counts", "must hold 4 counts");
     most_substeps_ = counts[0];
@@ -350,6 +357,7 @@ class VegetationProcess final : public coupler::Solver {
   std::vector<double> water_;
   int64_t node_substeps_ = 0;
   int most_substeps_ = 0, most_newton_iterations_ = 0, newton_restarts_ = 0, cutbacks_ = 0;
+  int64_t factorizations_ = 0;  // plant Jacobians factorised over the run
   Eigen::Vector3d drag_impulse_ = Eigen::Vector3d::Zero(),
                   last_drag_impulse_ = Eigen::Vector3d::Zero();
   const std::vector<Eigen::Vector3d> held_forces_;  // the scene's loads after the start

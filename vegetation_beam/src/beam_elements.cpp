@@ -80,13 +80,22 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
   const Eigen::Matrix3d h_bb = spring * (h2 * dc_db * dc_db.transpose() - h1 * d2c_bb);
   const Eigen::Matrix3d h_ab = spring * (h2 * dc_da * dc_db.transpose() - h1 * d2c_ab);
   const Eigen::Matrix3d h_ba = h_ab.transpose();
-  // Chain rule from (a, b) to nodes: a = x1 - x0, b = x2 - x1.
-  constexpr double along_a[3] = {-1, 1, 0}, along_b[3] = {0, -1, 1};
+  // Chain rule from (a, b) to nodes: a = x1 - x0, b = x2 - x1, so node 0 sees -a, node 1 a - b,
+  // node 2 b. Both matrices are symmetric: the blocks below the diagonal are the transposes of
+  // those above (h_aa and h_bb are symmetric to the bit, h_ba is h_ab's transpose).
+  out.stiffness[0][0] = h_aa;
+  out.stiffness[0][1] = h_ab - h_aa;
+  out.stiffness[0][2] = -h_ab;
+  out.stiffness[1][1] = ((h_aa - h_ab) - h_ba) + h_bb;
+  out.stiffness[1][2] = h_ab - h_bb;
+  out.stiffness[2][2] = h_bb;
   for (int n = 0; n < 3; ++n) {
-    for (int m = 0; m < 3; ++m) {
-      out.stiffness[n][m] = along_a[n] * along_a[m] * h_aa + along_a[n] * along_b[m] * h_ab +
-                            along_b[n] * along_a[m] * h_ba + along_b[n] * along_b[m] * h_bb;
-      out.damping[n][m] = damper * to_omega[n].transpose() * to_omega[m];
+    for (int m = n; m < 3; ++m) out.damping[n][m] = damper * to_omega[n].transpose() * to_omega[m];
+  }
+  for (int n = 1; n < 3; ++n) {
+    for (int m = 0; m < n; ++m) {
+      out.stiffness[n][m] = out.stiffness[m][n].transpose();
+      out.damping[n][m] = out.damping[m][n].transpose();
     }
   }
 }

@@ -114,18 +114,24 @@ void PlantField::newmark_kinematics(double dt, double mass_weight) {
 }
 
 // One Newton iteration of one plant: its residual, the Jacobian when due, and the correction.
-void PlantField::newton_iteration(int p, const NewtonSweep& sweep, NewtonProgress& progress,
+bool PlantField::newton_iteration(int p, const NewtonSweep& sweep, NewtonProgress& progress,
                                   std::vector<double>& scratch) {
-  if (progress.converged[p] && !plant_in_contact_[p]) return;
+  if (progress.converged[p] && !plant_in_contact_[p]) return false;
   // Gauss-Seidel across plants: contact forces see the partners already corrected in this
   // iteration, which halves the iterations of densely touching plants against Jacobi.
   if (sweep.contact && sweep.iteration > 1 && plant_in_contact_[p])
     refresh_contact_forces(p, sweep.dt);
   const Plant& plant = plants_[p];
   // Modified Newton: the Jacobian of the first iteration is kept for the sub-step (later
-  // iterations mostly resolve plant-to-plant contact, which it treats per node anyway).
-  const bool factorize = sweep.iteration == 1 || progress.refresh[p];
+  // iterations mostly resolve plant-to-plant contact, which it treats per node anyway), and
+  // over the window's later sub-steps of the same length for a plant out of contact: the mass
+  // term 1 / (beta dt^2) dominates it, and the shape changes little in a sub-step.
+  const bool in_contact = sweep.contact && plant_in_contact_[p];
+  if (sweep.iteration == 1)
+    progress.kept[p] = sweep.reuse && !in_contact && jacobian_dt_[p] == sweep.dt;
+  const bool factorize = (sweep.iteration == 1 && !progress.kept[p]) || progress.refresh[p];
   BandedMatrix& jacobian = jacobians_[p];
+  if (factorize) progress.kept[p] = 0;
   if (factorize) jacobian.resize(3 * plant.links, kHalfBandwidth);
   compute_forces(p, positions_, velocities_, *sweep.ambient, sweep.contact, forces_, drag_,
                  factorize ? &jacobian : nullptr, 1.0, sweep.damping_weight, sweep.robust);
@@ -138,20 +144,28 @@ void PlantField::newton_iteration(int p, const NewtonSweep& sweep, NewtonProgres
   }
   const Correction correction = apply_newton_correction(p, jacobian, residual_, factorize, scratch);
   progress.corrections[p] = correction;
-  // Robust attempt: a correction that did not fall by 4 means the kept Jacobian is too far from
-  // the current one; refactorise at the next iteration (contact-free plants only: contact
-  // iterations converge by Gauss-Seidel sweeps, which a new Jacobian does not speed up).
-  progress.refresh[p] = sweep.robust && sweep.iteration > 1 && !plant_in_contact_[p] &&
+  if (factorize) {
+    const bool keepable = !sweep.robust && !in_contact && !correction.singular;
+    jacobian_dt_[p] = keepable ? sweep.dt : 0.0;
+  }
+  // Robust attempt, or a Jacobian kept from an earlier sub-step: a correction that did not fall
+  // by 4 means the kept Jacobian is too far from the current one; refactorise at the next
+  // iteration (contact-free plants only: contact iterations converge by Gauss-Seidel sweeps,
+  // which a new Jacobian does not speed up).
+  progress.refresh[p] = (sweep.robust || progress.kept[p]) && sweep.iteration > 1 &&
+                        !plant_in_contact_[p] &&
                         correction.largest > 0.25 * progress.last_correction[p];
   progress.last_correction[p] = correction.largest;
   progress.converged[p] = correction.largest <= parameters_.newton_tolerance;
+  return factorize;
 }
 
 // Plants out of contact do not see each other: solved side by side (each writes only its own
 // nodes and entries, so the bits are those of the loop in order). Plants in contact follow in
 // index order (Gauss-Seidel). As in the plain loop, the failure reported is the lowest failing
 // plant, and plants after it do not matter (the attempt is then discarded).
-int PlantField::newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress) {
+int PlantField::newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress,
+                             int& factorizations) {
   const int count = plant_count();
   const auto in_contact = [&](int p) { return sweep.contact && plant_in_contact_[p] != 0; };
   const auto fails = [&](int p) {
@@ -163,18 +177,20 @@ int PlantField::newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress)
   if (newton_scratch_.size() < static_cast<std::size_t>(omp_get_max_threads()))
     newton_scratch_.resize(omp_get_max_threads());
   std::fill(progress.corrections.begin(), progress.corrections.end(), Correction{});
-  int failed = count;
-#pragma omp parallel for schedule(dynamic, 4) reduction(min : failed) if (side_by_side)
+  int failed = count, factorized = 0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(min : failed) reduction(+ : factorized) \
+    if (side_by_side)
   for (int p = 0; p < count; ++p) {
     if (in_contact(p)) continue;
-    newton_iteration(p, sweep, progress, newton_scratch_[omp_get_thread_num()]);
+    factorized += newton_iteration(p, sweep, progress, newton_scratch_[omp_get_thread_num()]);
     if (fails(p)) failed = std::min(failed, p);
   }
   for (int p = 0; p < std::min(failed, count); ++p) {
     if (!in_contact(p)) continue;
-    newton_iteration(p, sweep, progress, newton_scratch_[0]);
+    factorized += newton_iteration(p, sweep, progress, newton_scratch_[0]);
     if (fails(p)) failed = p;
   }
+  factorizations += factorized;
   return failed;
 }
 
@@ -209,19 +225,22 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
   sweep.robust = robust;
   sweep.contact = parameters_.contact && plant_count() > 1;
   sweep.ambient = &ambient;
+  sweep.reuse = parameters_.reuse_jacobian && !robust;
   if (sweep.contact) update_contact_candidates();
   NewtonProgress progress;
   progress.converged.assign(plants_.size(), 0);
   progress.refresh.assign(plants_.size(), 0);
+  progress.kept.assign(plants_.size(), 0);
   progress.last_correction.assign(plants_.size(), 0.0);
   progress.corrections.resize(plants_.size());
   jacobians_.resize(plants_.size());
+  jacobian_dt_.resize(plants_.size(), 0.0);
   for (int iteration = 1; iteration <= parameters_.max_newton_iterations; ++iteration) {
     outcome.iterations = iteration;
     sweep.iteration = iteration;
     newmark_kinematics(dt, mass_weight);
     if (sweep.contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
-    const int failed = newton_sweep(sweep, progress);
+    const int failed = newton_sweep(sweep, progress, outcome.factorizations);
     if (failed < plant_count()) {
       const Correction& correction = progress.corrections[failed];
       const Plant& plant = plants_[failed];
@@ -274,10 +293,12 @@ void PlantField::substep(double t0, double dt, const std::vector<Eigen::Vector3d
     // regime where only the robust one converges; trying fast first would waste its iterations).
     const NewtonOutcome first = newton_attempt(dt, ambient_end, robust_first_);
     int iterations = first.iterations;
+    report.factorizations += first.factorizations;
     NewtonOutcome outcome = first;
     if (!first.converged) {
       outcome = newton_attempt(dt, ambient_end, !robust_first_);
       iterations += outcome.iterations;
+      report.factorizations += outcome.factorizations;
       if (!robust_first_ && outcome.converged) {
         robust_first_ = true;
         ++report.newton_restarts;

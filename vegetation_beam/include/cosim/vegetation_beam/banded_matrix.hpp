@@ -20,6 +20,18 @@ class BandedMatrix {
   double at(int row, int col) const { return data_[index(row, col)]; }
   // Adds weight * block at the 3x3 block of node rows `row_node`, node columns `col_node`.
   void add_block(int row_node, int col_node, const Eigen::Matrix3d& block, double weight);
+  // Adds stiffness_weight * stiffness, then damping_weight * damping, entry by entry (the sums
+  // of two add_block calls, in one pass).
+  void add_blocks(int row_node, int col_node, const Eigen::Matrix3d& stiffness,
+                  double stiffness_weight, const Eigen::Matrix3d& damping, double damping_weight) {
+    for (int r = 0; r < 3; ++r) {
+      double* row = &at(3 * row_node + r, 3 * col_node);
+      for (int c = 0; c < 3; ++c) {
+        row[c] += stiffness_weight * stiffness(r, c);
+        row[c] += damping_weight * damping(r, c);
+      }
+    }
+  }
   void add_diagonal(int row, double value) { at(row, row) += value; }
 
   // LU factorisation in place; false on a zero or non-finite pivot, whose row goes into

@@ -52,6 +52,9 @@ struct BeamParameters {
   int max_substeps = 100000;        // per window; more throws StabilityError
   double newton_tolerance = 1e-10;  // on the largest position correction, in link lengths
   int max_newton_iterations = 20;   // per attempt; a sub-step makes at most two (see advance)
+  // A plant out of contact keeps its factorised Jacobian over the window's later sub-steps of
+  // the same length (modified Newton across sub-steps); each window starts with a fresh one.
+  bool reuse_jacobian = true;
 };
 
 // The keys of one `plants` entry (count and spacing aside), declared once for the parser, the
@@ -153,6 +156,8 @@ void visit_parameters(P& p, V& v) {
     p.newton_tolerance);
   v(Key("max_newton_iterations").in(Range::between(1, 1000)).doc("per attempt of a sub-step"),
     p.max_newton_iterations);
+  v(Key("reuse_jacobian").doc("keep each plant's Newton Jacobian over a window's sub-steps"),
+    p.reuse_jacobian);
 }
 
 // Library checks (the declared ranges and rules); throw scenario::ParameterError naming the key.
@@ -181,6 +186,8 @@ struct WindowReport {
   int max_newton_iterations = 0;  // largest Newton iteration count of any sub-step (both tries)
   int newton_restarts = 0;        // times the robust Newton attempt took over in the window
   int cutbacks = 0;               // sub-steps halved because both Newton attempts failed
+  int factorizations = 0;         // plant Jacobians factorised (one per plant and sub-step
+                                  // without reuse_jacobian)
 };
 
 // A linear vibration mode of one plant about its current shape.
@@ -296,7 +303,8 @@ class PlantField {
   struct NewtonOutcome {
     bool converged = false;
     int iterations = 0;
-    std::string failure;  // what went wrong, empty if converged
+    int factorizations = 0;  // plant Jacobians factorised in the attempt
+    std::string failure;     // what went wrong, empty if converged
     int plant = 0, node = 0;
     double residual = 0;    // N, at that node
     double correction = 0;  // last largest correction of that plant, in link lengths
@@ -328,18 +336,22 @@ class PlantField {
     double dt = 0, mass_weight = 0, damping_weight = 0;
     int iteration = 1;
     bool robust = false, contact = false;
+    bool reuse = false;  // a plant's Jacobian kept from an earlier sub-step of this dt may serve
     const std::vector<Eigen::Vector3d>* ambient = nullptr;
   };
   // Per plant, over the iterations of one attempt.
   struct NewtonProgress {
     std::vector<char> converged, refresh;
+    std::vector<char> kept;  // the plant solves with a Jacobian kept from an earlier sub-step
     std::vector<double> last_correction;
     std::vector<Correction> corrections;  // of the current iteration
   };
-  void newton_iteration(int plant, const NewtonSweep& sweep, NewtonProgress& progress,
+  // Returns whether it factorised the plant's Jacobian.
+  bool newton_iteration(int plant, const NewtonSweep& sweep, NewtonProgress& progress,
                         std::vector<double>& scratch);
-  // One iteration over all plants; returns the lowest failing plant, or plant_count().
-  int newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress);
+  // One iteration over all plants; returns the lowest failing plant, or plant_count(), and adds
+  // the Jacobians it factorised to `factorizations`.
+  int newton_sweep(const NewtonSweep& sweep, NewtonProgress& progress, int& factorizations);
   // Plant and node with the largest residual among the plants not `converged`.
   void locate_largest_residual(const std::vector<char>& converged, NewtonOutcome& outcome) const;
   void check_state(const std::vector<Eigen::Vector3d>& ambient) const;
@@ -393,6 +405,9 @@ class PlantField {
   std::vector<Eigen::Vector3d> forces_, drag_, residual_;
   std::vector<std::vector<double>> newton_scratch_;  // per thread: one plant's correction
   std::vector<BandedMatrix> jacobians_;  // per plant, factorised at a sub-step's first iteration
+  // Per plant: the sub-step length its factorised Jacobian was built for, 0 when it may not be
+  // kept (none yet, a new window, built in contact or in a robust attempt, or it failed).
+  std::vector<double> jacobian_dt_;
   // Contact: candidate node pairs within reach plus a margin, rebuilt when nodes moved.
   std::vector<std::pair<int, int>> contact_candidates_;
   std::vector<char> contact_active_;                   // per candidate, fixed during a sub-step
