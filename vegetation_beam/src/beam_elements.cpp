@@ -16,7 +16,7 @@ Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& a) {
 
 AxialLink axial_link(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
                      const Eigen::Vector3d& va, const Eigen::Vector3d& vb, double spring,
-                     double damper, double rest_length) {
+                     double damper, double rest_length, bool with_matrices) {
   AxialLink out;
   const Eigen::Vector3d r = xb - xa;
   const double length = r.norm();
@@ -24,12 +24,13 @@ AxialLink axial_link(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
   const double stretch = length - rest_length;
   const double stretch_rate = (vb - va).dot(e);
   out.force_on_b = -(spring * stretch + damper * stretch_rate) * e;
+  out.energy = 0.5 * spring * stretch * stretch;
+  if (!with_matrices) return out;
   const Eigen::Matrix3d along = e * e.transpose();
   // Transverse term (1 - l0/L): rotating a stretched spring needs force (geometric stiffness).
   out.stiffness =
       spring * (along + (1.0 - rest_length / length) * (Eigen::Matrix3d::Identity() - along));
   out.damping = damper * along;
-  out.energy = 0.5 * spring * stretch * stretch;
   return out;
 }
 
@@ -101,7 +102,8 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
 }
 
 NodeDrag node_drag(const Eigen::Vector3d& tangent, const Eigen::Vector3d& ambient,
-                   const Eigen::Vector3d& velocity, double factor, bool with_tangent_stiffness) {
+                   const Eigen::Vector3d& velocity, double factor, bool with_tangent_stiffness,
+                   bool with_matrices) {
   NodeDrag out;
   const Eigen::Vector3d relative = ambient - velocity;
   const double along = relative.dot(tangent);
@@ -109,6 +111,7 @@ NodeDrag node_drag(const Eigen::Vector3d& tangent, const Eigen::Vector3d& ambien
   const double speed = normal.norm();
   out.force = factor * speed * normal;
   out.tangent_stiffness.setZero();
+  if (!with_matrices && !with_tangent_stiffness) return out;
   if (speed > 0) {
     const Eigen::Vector3d direction = normal / speed;
     const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - tangent * tangent.transpose();

@@ -14,9 +14,10 @@ struct AxialLink {
   Eigen::Matrix3d damping;     // same pattern
   double energy = 0;
 };
+// The matrices are left unset without `with_matrices`.
 AxialLink axial_link(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
                      const Eigen::Vector3d& va, const Eigen::Vector3d& vb, double spring,
-                     double damper, double rest_length);
+                     double damper, double rest_length, bool with_matrices = true);
 
 // Bending joint at node 1 between links (0,1) and (1,2) (seed eq. 10, 11, 13, 15). The energy is
 // (spring/2) phi^2 with phi the angle between the links: the moment spring * phi is the elastica
@@ -36,11 +37,11 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
 // (seed eq. 16 with |u_n| u_n): factor = 0.5 rho C_D b ds.
 struct NodeDrag {
   Eigen::Vector3d force;
-  Eigen::Matrix3d damping;            // minus d force / d node velocity
+  Eigen::Matrix3d damping;            // minus d force / d node velocity (unset without matrices)
   Eigen::Matrix3d tangent_stiffness;  // minus d force / d tangent, when asked (else zero)
 };
 NodeDrag node_drag(const Eigen::Vector3d& tangent, const Eigen::Vector3d& ambient,
                    const Eigen::Vector3d& velocity, double factor,
-                   bool with_tangent_stiffness = false);
+                   bool with_tangent_stiffness = false, bool with_matrices = true);
 
 }  // namespace cosim::vegetation

@@ -222,8 +222,9 @@ void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector
 
   // Axial links (eq. 9).
   for (int i = 1; i <= links; ++i) {
-    const AxialLink link = axial_link(x[first + i - 1], x[first + i], v[first + i - 1],
-                                      v[first + i], plant.axial_spring, plant.axial_damper, l0);
+    const AxialLink link =
+        axial_link(x[first + i - 1], x[first + i], v[first + i - 1], v[first + i],
+                   plant.axial_spring, plant.axial_damper, l0, jacobian != nullptr);
     force[first + i] += link.force_on_b;
     force[first + i - 1] -= link.force_on_b;
     for (const auto& [a, b, sign] : {std::tuple{i, i, 1.0}, std::tuple{i - 1, i - 1, 1.0},
@@ -266,9 +267,9 @@ void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector
       const double share = (i == 0 || i == links) ? 0.5 * l0 : l0;
       // Nodes out of the water (fraction 0) feel no drag.
       const bool tangent_terms = drag_stiffness && jacobian != nullptr;
-      const NodeDrag d =
-          node_drag(tangent, ambient[first + i], v[first + i],
-                    plant.drag_factor * share * water_fraction_[first + i], tangent_terms);
+      const NodeDrag d = node_drag(tangent, ambient[first + i], v[first + i],
+                                   plant.drag_factor * share * water_fraction_[first + i],
+                                   tangent_terms, jacobian != nullptr);
       drag[first + i] = d.force;
       force[first + i] += d.force;
       add(i, i, d.damping, damping_weight);
