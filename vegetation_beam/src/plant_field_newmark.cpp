@@ -24,8 +24,6 @@ constexpr int kMaxCutbacks = 6;
 // From this many plants the Newton iterations of plants out of contact run side by side (OpenMP);
 // under it the fork and join cost more than the work.
 constexpr int kPlantsSideBySide = 16;
-// From this many nodes the Newmark kinematics run side by side (about 10 ns a node).
-constexpr int kNodesSideBySide = 1024;
 
 }  // namespace
 
@@ -101,9 +99,7 @@ void PlantField::locate_largest_residual(const std::vector<char>& converged,
 
 void PlantField::newmark_kinematics(double dt, double mass_weight) {
   // Newmark relations (eq. 22-23) give acceleration and velocity from the trial position.
-  const int nodes = static_cast<int>(positions_.size());
-#pragma omp parallel for schedule(static) if (nodes >= kNodesSideBySide)
-  for (int k = 0; k < nodes; ++k) {
+  for (std::size_t k = 0; k < positions_.size(); ++k) {
     if (node_mass_[k] == 0) continue;
     accelerations_[k] =
         (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
