@@ -59,15 +59,22 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
   out.force[2] = spring * h1 * dc_db;
   out.force[1] = -out.force[0] - out.force[2];
 
-  // Dashpot on the relative angular velocity of the links, omega = l x dl/dt / |l|^2.
-  const Eigen::Matrix3d rate_a = cross_matrix(a) / (la * la);
-  const Eigen::Matrix3d rate_b = cross_matrix(b) / (lb * lb);
-  const Eigen::Matrix3d to_omega[3] = {rate_a, -(rate_a + rate_b), rate_b};
+  // Dashpot on the relative angular velocity of the links, omega = l x dl/dt / |l|^2:
+  // omega = T_0 v_0 + T_1 v_1 + T_2 v_2 with T_0 = [a]x / la^2, T_2 = [b]x / lb^2 and
+  // T_1 = -(T_0 + T_2), and the force on node n is -damper T_n^T omega ([l]x^T w = w x l).
+  const double la2 = la * la, lb2 = lb * lb;
   if (damper > 0) {
-    const Eigen::Vector3d omega = to_omega[0] * v[0] + to_omega[1] * v[1] + to_omega[2] * v[2];
-    for (int n = 0; n < 3; ++n) out.force[n] -= damper * to_omega[n].transpose() * omega;
+    const Eigen::Vector3d omega = a.cross(v[0] - v[1]) / la2 + b.cross(v[2] - v[1]) / lb2;
+    const Eigen::Vector3d on_a = damper * a.cross(omega) / la2;
+    const Eigen::Vector3d on_b = damper * b.cross(omega) / lb2;
+    out.force[0] += on_a;
+    out.force[1] -= on_a + on_b;
+    out.force[2] += on_b;
   }
   if (!with_matrices) return;
+  const Eigen::Matrix3d rate_a = cross_matrix(a) / la2;
+  const Eigen::Matrix3d rate_b = cross_matrix(b) / lb2;
+  const Eigen::Matrix3d to_omega[3] = {rate_a, -(rate_a + rate_b), rate_b};
 
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   const Eigen::Matrix3d pa = identity - ah * ah.transpose();
