@@ -132,11 +132,15 @@ TEST(NewtonSideBySide, SameBitsWithOneAndTwoThreads) {
     blade.base = Eigen::Vector3d(0.0015 * k, 0.5, 0);
     specs.push_back(blade);
   }
+  int most_in_contact = 0;
   const auto run = [&](int threads) {
     omp_set_num_threads(threads);
     PlantField field(specs, water(10));
     const auto flow = testing::uniform(field, Eigen::Vector3d(0.15, 0, 0));
-    for (int window = 0; window < 4; ++window) field.advance(0.002, flow, flow);
+    for (int window = 0; window < 4; ++window) {
+      const WindowReport report = field.advance(0.002, flow, flow);
+      most_in_contact = std::max(most_in_contact, report.most_plants_in_contact);
+    }
     return field.positions();
   };
   const int threads = omp_get_max_threads();
@@ -152,6 +156,7 @@ TEST(NewtonSideBySide, SameBitsWithOneAndTwoThreads) {
       (one[first_of_pair + 2 * nodes - 1] - one[first_of_pair + nodes - 1]).norm();
   std::printf("tips of the touching pair %.3f mm apart\n", 1e3 * tip_gap);
   EXPECT_GT(tip_gap, 0.0017);
+  EXPECT_EQ(most_in_contact, 2);  // the pair, and none of the free strips
 }
 
 }  // namespace
@@ -184,6 +189,7 @@ TEST(NewtonKeptJacobian, OneFactorisationPerPlantAndWindowAndTheSameMotion) {
       const WindowReport report = field.advance(0.002, flow, flow);
       EXPECT_EQ(report.newton_restarts, 0);
       EXPECT_EQ(report.cutbacks, 0);
+      EXPECT_EQ(report.most_plants_in_contact, 0);  // kept Jacobians need plants out of contact
       out.substeps += report.substeps;
       out.factorizations += report.factorizations;
     }

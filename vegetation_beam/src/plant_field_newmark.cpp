@@ -239,7 +239,11 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
     outcome.iterations = iteration;
     sweep.iteration = iteration;
     newmark_kinematics(dt, mass_weight);
-    if (sweep.contact && iteration == 1) compute_contact_forces(positions_, velocities_, true);
+    if (sweep.contact && iteration == 1) {
+      compute_contact_forces(positions_, velocities_, true);
+      outcome.plants_in_contact =
+          static_cast<int>(std::count(plant_in_contact_.begin(), plant_in_contact_.end(), char{1}));
+    }
     const int failed = newton_sweep(sweep, progress, outcome.factorizations);
     if (failed < plant_count()) {
       const Correction& correction = progress.corrections[failed];
@@ -294,6 +298,8 @@ void PlantField::substep(double t0, double dt, const std::vector<Eigen::Vector3d
     const NewtonOutcome first = newton_attempt(dt, ambient_end, robust_first_);
     int iterations = first.iterations;
     report.factorizations += first.factorizations;
+    report.most_plants_in_contact =
+        std::max(report.most_plants_in_contact, first.plants_in_contact);
     NewtonOutcome outcome = first;
     if (!first.converged) {
       outcome = newton_attempt(dt, ambient_end, !robust_first_);

@@ -183,11 +183,12 @@ inline double estimated_memory_bytes(double plants, double nodes) {
 struct WindowReport {
   int substeps = 0;
   double substep = 0;
-  int max_newton_iterations = 0;  // largest Newton iteration count of any sub-step (both tries)
-  int newton_restarts = 0;        // times the robust Newton attempt took over in the window
-  int cutbacks = 0;               // sub-steps halved because both Newton attempts failed
-  int factorizations = 0;         // plant Jacobians factorised (one per plant and sub-step
-                                  // without reuse_jacobian)
+  int max_newton_iterations = 0;   // largest Newton iteration count of any sub-step (both tries)
+  int newton_restarts = 0;         // times the robust Newton attempt took over in the window
+  int cutbacks = 0;                // sub-steps halved because both Newton attempts failed
+  int factorizations = 0;          // plant Jacobians factorised (one per plant and sub-step
+                                   // without reuse_jacobian)
+  int most_plants_in_contact = 0;  // in any sub-step (they are solved one after another)
 };
 
 // A linear vibration mode of one plant about its current shape.
@@ -304,7 +305,8 @@ class PlantField {
     bool converged = false;
     int iterations = 0;
     int factorizations = 0;  // plant Jacobians factorised in the attempt
-    std::string failure;     // what went wrong, empty if converged
+    int plants_in_contact = 0;
+    std::string failure;  // what went wrong, empty if converged
     int plant = 0, node = 0;
     double residual = 0;    // N, at that node
     double correction = 0;  // last largest correction of that plant, in link lengths
