@@ -27,6 +27,18 @@ PlantSpec strip(double density, double tilt_degrees) {
   return blade;
 }
 
+// 20 PET strips 1 cm apart across the stream, upright or leaning 10 or 20 degrees: they never
+// touch.
+std::vector<PlantSpec> free_strips() {
+  std::vector<PlantSpec> specs;
+  for (int k = 0; k < 20; ++k) {
+    PlantSpec blade = strip(1380, 10.0 * (k % 3));
+    blade.base = Eigen::Vector3d(0, 0.01 * k, 0);
+    specs.push_back(blade);
+  }
+  return specs;
+}
+
 BeamParameters water(double safety_factor) {
   BeamParameters parameters;
   parameters.gravity = Eigen::Vector3d(0, 0, -9.81);
@@ -121,12 +133,7 @@ TEST(NewtonFailure, NamesThePlantAndNodeOfTheLargestResidualAndTheKeys) {
 // bits with one and two threads. (The free strips are not compared with a field without the
 // pair: the sub-step, its restarts and cutbacks are the field's, so the pair changes them too.)
 TEST(NewtonSideBySide, SameBitsWithOneAndTwoThreads) {
-  std::vector<PlantSpec> specs;
-  for (int k = 0; k < 20; ++k) {
-    PlantSpec blade = strip(1380, 10.0 * (k % 3));
-    blade.base = Eigen::Vector3d(0, 0.01 * k, 0);
-    specs.push_back(blade);
-  }
+  std::vector<PlantSpec> specs = free_strips();
   for (int k = 0; k < 2; ++k) {  // 1.5 mm apart: the 2 mm wide strips touch at once
     PlantSpec blade = strip(1380, 0.0);
     blade.base = Eigen::Vector3d(0.0015 * k, 0.5, 0);
@@ -159,22 +166,11 @@ TEST(NewtonSideBySide, SameBitsWithOneAndTwoThreads) {
   EXPECT_EQ(most_in_contact, 2);  // the pair, and none of the free strips
 }
 
-}  // namespace
-}  // namespace cosim::vegetation
-
-namespace cosim::vegetation {
-namespace {
-
 // reuse_jacobian keeps each plant's factorised Jacobian over the later sub-steps of a window:
 // one factorisation per plant and window instead of one per sub-step, and the same motion to
 // the Newton tolerance. 20 strips at safety_factor 10 in a 0.15 m/s stream, 20 windows of 2 ms.
 TEST(NewtonKeptJacobian, OneFactorisationPerPlantAndWindowAndTheSameMotion) {
-  std::vector<PlantSpec> specs;
-  for (int k = 0; k < 20; ++k) {
-    PlantSpec blade = strip(1380, 10.0 * (k % 3));
-    blade.base = Eigen::Vector3d(0, 0.01 * k, 0);
-    specs.push_back(blade);
-  }
+  std::vector<PlantSpec> specs = free_strips();
   struct Run {
     std::vector<Eigen::Vector3d> positions;
     int substeps = 0, factorizations = 0;
