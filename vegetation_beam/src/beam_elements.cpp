@@ -89,8 +89,9 @@ void bending_joint(const Eigen::Vector3d x[3], const Eigen::Vector3d v[3], doubl
   const Eigen::Matrix3d h_ab = spring * (h2 * dc_da * dc_db.transpose() - h1 * d2c_ab);
   const Eigen::Matrix3d h_ba = h_ab.transpose();
   // Chain rule from (a, b) to nodes: a = x1 - x0, b = x2 - x1, so node 0 sees -a, node 1 a - b,
-  // node 2 b. Both matrices are symmetric: the blocks below the diagonal are the transposes of
-  // those above (h_aa and h_bb are symmetric to the bit, h_ba is h_ab's transpose).
+  // node 2 b. Both matrices are symmetric: the blocks below the diagonal are taken as the
+  // transposes of those above, so those pairs match to the bit (the diagonal blocks are
+  // symmetric to round-off: h2 dc dc^T rounds its two halves differently).
   out.stiffness[0][0] = h_aa;
   out.stiffness[0][1] = h_ab - h_aa;
   out.stiffness[0][2] = -h_ab;
