@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
@@ -52,15 +53,26 @@ void PlantField::update_contact_candidates() {
     keyed[k] = {cell_key(cells[k].x(), cells[k].y(), cells[k].z()), static_cast<int>(k)};
   }
   std::sort(keyed.begin(), keyed.end());
+  // Each occupied cell's run in `keyed`, found by hash: most of a node's 27 neighbour cells are
+  // empty, and a binary search over all nodes for each took a fifth of a reed field's time.
+  std::unordered_map<std::uint64_t, std::pair<std::size_t, std::size_t>> runs;
+  runs.reserve(n);
+  for (std::size_t k = 0; k < n;) {
+    std::size_t end = k + 1;
+    while (end < n && keyed[end].first == keyed[k].first) ++end;
+    runs.emplace(keyed[k].first, std::pair{k, end});
+    k = end;
+  }
   for (std::size_t a = 0; a < n; ++a) {
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
           const std::uint64_t key =
               cell_key(cells[a].x() + dx, cells[a].y() + dy, cells[a].z() + dz);
-          auto it = std::lower_bound(keyed.begin(), keyed.end(), std::pair{key, -1});
-          for (; it != keyed.end() && it->first == key; ++it) {
-            const std::size_t b = static_cast<std::size_t>(it->second);
+          const auto run = runs.find(key);
+          if (run == runs.end()) continue;
+          for (std::size_t t = run->second.first; t < run->second.second; ++t) {
+            const std::size_t b = static_cast<std::size_t>(keyed[t].second);
             if (b <= a || node_plant_[a] == node_plant_[b]) continue;
             const bool a_base = plants_[node_plant_[a]].first == static_cast<int>(a);
             const bool b_base = plants_[node_plant_[b]].first == static_cast<int>(b);
