@@ -1,4 +1,5 @@
-// The bending joint's kernel (vegetation_beam/src/beam_elements.cpp): its stiffness and damping
+// The band solver of the Newton step, against a dense LU. The bending joint's kernel
+// (vegetation_beam/src/beam_elements.cpp): its stiffness and damping
 // blocks are minus the derivatives of its forces by the node positions and velocities (central
 // differences; by position at rest, since the Jacobian leaves out how the dashpot's force turns
 // with the links), and both matrices are symmetric, as the Newton Jacobian assumes: the blocks
@@ -7,7 +8,10 @@
 
 #include <random>
 
+#include <Eigen/LU>
+
 #include "beam_elements.hpp"
+#include "cosim/vegetation_beam/banded_matrix.hpp"
 
 namespace cosim::vegetation {
 namespace {
@@ -26,6 +30,33 @@ Joint random_joint(std::mt19937_64& rng) {
   joint.x[2] = joint.x[1] + 0.1 * Eigen::Vector3d::UnitZ() + 0.03 * vector();
   for (auto& v : joint.v) v = vector();
   return joint;
+}
+
+// Unsymmetric, diagonally dominant band matrices (as the Jacobian with the mass term), with the
+// plants' half bandwidth 8 (the unrolled path, and its ends) and others (the general path), some
+// smaller than the band.
+TEST(BandedMatrix, SolvesAsADenseLu) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (const int w : {8, 1, 2, 5}) {
+    for (const int n : {3, 9, 30, 61}) {
+      BandedMatrix band;
+      band.resize(n, w);
+      for (int i = 0; i < n; ++i) {
+        for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j)
+          band.at(i, j) = i == j ? 4.0 * (w + 1) + uniform(rng) : uniform(rng);
+      }
+      const Eigen::MatrixXd dense = band.to_dense();
+      std::vector<double> rhs(n);
+      for (double& value : rhs) value = uniform(rng);
+      const Eigen::VectorXd expected =
+          dense.partialPivLu().solve(Eigen::Map<const Eigen::VectorXd>(rhs.data(), n));
+      ASSERT_TRUE(band.factorize());
+      band.solve(rhs);
+      for (int i = 0; i < n; ++i)
+        EXPECT_NEAR(rhs[i], expected[i], 1e-14 * expected.cwiseAbs().maxCoeff()) << w << n << i;
+    }
+  }
 }
 
 TEST(BendingJoint, MatricesAreMinusTheForceDerivativesAndSymmetric) {

@@ -29,12 +29,14 @@ bool BandedMatrix::factorize(int* failed_row) {
   const int n = size_, w = half_bandwidth_;
   // Gaussian elimination restricted to the band (no fill-in outside it without pivoting); the
   // multipliers are kept below the diagonal.
+  inverse_pivot_.resize(n);
   for (int k = 0; k < n; ++k) {
     const double pivot = at(k, k);
     if (pivot == 0.0 || !std::isfinite(pivot)) {
       if (failed_row != nullptr) *failed_row = k;
       return false;
     }
+    inverse_pivot_[k] = 1.0 / pivot;
     const int last = std::min(n - 1, k + w);
     for (int i = k + 1; i <= last; ++i) {
       const double factor = at(i, k) / pivot;
@@ -49,10 +51,14 @@ bool BandedMatrix::factorize(int* failed_row) {
 namespace {
 
 // Forward and back substitution with the factors stored row by row, `width` entries a row with
-// the diagonal at offset w. With w known at compile time (Fixed > 0) the loops over a full band
-// unroll; the operations and their order are the same either way, so are the bits.
+// the diagonal at offset w. Both go by columns: once x_k is known, it is taken out of the w rows
+// it couples, which are independent of each other, so a row waits for one multiply-subtract per
+// column instead of a chain of w (and the pivots are multiplied by their stored inverses, not
+// divided by). With w known at compile time (Fixed > 0) the loops over a full band unroll; the
+// operations and their order are the same either way.
 template <int Fixed>
-void substitute(const double* data, int n, int runtime_w, int width, double* rhs) {
+void substitute(const double* data, const double* inverse_pivot, int n, int runtime_w, int width,
+                double* rhs) {
   const int w = Fixed > 0 ? Fixed : runtime_w;
   for (int k = 0; k < n; ++k) {
     const double rk = rhs[k];
@@ -64,15 +70,14 @@ void substitute(const double* data, int n, int runtime_w, int width, double* rhs
     }
   }
   for (int k = n - 1; k >= 0; --k) {
-    const double* row = data + k * width + w;  // row[j - k] = U(k, j)
-    double sum = rhs[k];
-    if (Fixed > 0 && k + w < n) {
-      for (int j = 1; j <= Fixed; ++j) sum -= row[j] * rhs[k + j];
+    const double xk = rhs[k] * inverse_pivot[k];
+    rhs[k] = xk;
+    // U(i, k) = data[i * width + (k - i + w)] for the rows i = k - w .. k - 1 above.
+    if (Fixed > 0 && k >= w) {
+      for (int i = 1; i <= Fixed; ++i) rhs[k - i] -= data[(k - i) * width + (w + i)] * xk;
     } else {
-      const int last = std::min(n - 1, k + w);
-      for (int j = k + 1; j <= last; ++j) sum -= row[j - k] * rhs[j];
+      for (int i = std::max(0, k - w); i < k; ++i) rhs[i] -= data[i * width + (k - i + w)] * xk;
     }
-    rhs[k] = sum / row[0];
   }
 }
 
@@ -80,9 +85,9 @@ void substitute(const double* data, int n, int runtime_w, int width, double* rhs
 
 void BandedMatrix::solve(std::vector<double>& rhs) const {
   if (half_bandwidth_ == 8) {  // the plants' Jacobian: 3 dofs a node, bending two nodes apart
-    substitute<8>(data_.data(), size_, half_bandwidth_, width_, rhs.data());
+    substitute<8>(data_.data(), inverse_pivot_.data(), size_, half_bandwidth_, width_, rhs.data());
   } else {
-    substitute<0>(data_.data(), size_, half_bandwidth_, width_, rhs.data());
+    substitute<0>(data_.data(), inverse_pivot_.data(), size_, half_bandwidth_, width_, rhs.data());
   }
 }
 

@@ -51,6 +51,7 @@ class BandedMatrix {
   int index(int row, int col) const { return row * width_ + (col - row + half_bandwidth_); }
   int size_ = 0, half_bandwidth_ = 0, width_ = 1;
   std::vector<double> data_;
+  std::vector<double> inverse_pivot_;  // 1 / U(k, k), set by factorize()
 };
 
 }  // namespace cosim::vegetation
