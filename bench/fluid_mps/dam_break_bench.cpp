@@ -43,6 +43,7 @@ void count_stages(benchmark::State& state, const cosim::mps::StageSeconds& t, lo
   state.counters["ms_pressure_setup"] = t.pressure_setup * per_step;
   state.counters["ms_pressure_solve"] = t.pressure_solve * per_step;
   state.counters["ms_correction"] = t.correction * per_step;
+  state.counters["ms_finish"] = t.finish * per_step;
 }
 
 void BM_DamBreakStep(benchmark::State& state) {

@@ -51,8 +51,8 @@ void PlantField::add_bed_contact(const Plant& plant, const std::vector<Eigen::Ve
     if (!(normal > 0)) continue;  // a node leaving the bed faster than the spring pushes
     force[k] += normal * n;
     if (jacobian == nullptr) continue;
-    jacobian->add_block(i - 1, i - 1, along, plant.bed_spring * stiffness_weight);
-    jacobian->add_block(i - 1, i - 1, along, plant.bed_damper * damping_weight);
+    jacobian->add_blocks(i - 1, i - 1, along, plant.bed_spring * stiffness_weight, along,
+                         plant.bed_damper * damping_weight);
   }
 }
 

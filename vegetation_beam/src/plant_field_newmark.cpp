@@ -131,8 +131,10 @@ bool PlantField::newton_iteration(int p, const NewtonSweep& sweep, NewtonProgres
     progress.kept[p] = sweep.reuse && !in_contact && jacobian_dt_[p] == sweep.dt;
   const bool factorize = (sweep.iteration == 1 && !progress.kept[p]) || progress.refresh[p];
   BandedMatrix& jacobian = jacobians_[p];
-  if (factorize) progress.kept[p] = 0;
-  if (factorize) jacobian.resize(3 * plant.links, kHalfBandwidth);
+  if (factorize) {
+    progress.kept[p] = 0;
+    jacobian.resize(3 * plant.links, kHalfBandwidth);
+  }
   compute_forces(p, positions_, velocities_, *sweep.ambient, sweep.contact, forces_, drag_,
                  factorize ? &jacobian : nullptr, 1.0, sweep.damping_weight, sweep.robust);
   for (int i = 1; i <= plant.links; ++i) {
