@@ -139,9 +139,10 @@ TEST(LightBladeBedSlow, SerialImplicitAtCoarseWindowsMatchesTheFinerExplicitRuns
   }
   const auto [height, streamwise] = ensemble_mean_tip(implicit_runs);
   const auto [reference_height, reference_streamwise] = ensemble_mean_tip(explicit_runs);
-  fmt::print("mean tip over 0.15-0.3 s, three runs a side: implicit {:.2f} / {:.2f} mm, explicit "
-             "{:.2f} / {:.2f} mm (height / streamwise)\n",
-             1e3 * height, 1e3 * streamwise, 1e3 * reference_height, 1e3 * reference_streamwise);
+  fmt::print(
+      "mean tip over 0.15-0.3 s, three runs a side: implicit {:.2f} / {:.2f} mm, explicit "
+      "{:.2f} / {:.2f} mm (height / streamwise)\n",
+      1e3 * height, 1e3 * streamwise, 1e3 * reference_height, 1e3 * reference_streamwise);
   EXPECT_NEAR(height, reference_height, 3.7e-3);
   EXPECT_NEAR(streamwise, reference_streamwise, 1.0e-3);
 }
