@@ -207,6 +207,7 @@ class FluidProcess final : public coupler::Solver {
                              {"correction", t.correction},
                              {"finish", t.finish},
                              {"coupling_hooks", hook_seconds_}};
+    info["neighbour_searches"] = neighbour_searches_;  // this run's, as stage_seconds
     info["steps"] = steps_;
     info["mean_pcg_iterations"] = steps_ > 0 ? double(pcg_iterations_) / steps_ : 0.0;
     info["most_pcg_iterations"] = most_pcg_iterations_;
@@ -462,6 +463,7 @@ class FluidProcess final : public coupler::Solver {
         }
       }
       stage_seconds_ += step.stage_seconds;
+      neighbour_searches_ += step.neighbour_searches;
       pcg_iterations_ += step.pcg_iterations;
       most_pcg_iterations_ = std::max(most_pcg_iterations_, step.pcg_iterations);
     }
@@ -473,6 +475,7 @@ class FluidProcess final : public coupler::Solver {
   std::unique_ptr<mps::FluidSystem> system_;
   mps::StageSeconds stage_seconds_;  // summed over the steps of this run
   double hook_seconds_ = 0.0;        // point forces, displaced volumes, sampling
+  int64_t neighbour_searches_ = 0;   // pair lists built in this run's steps
   coupler::FlowLink link_;
   output::PointSeriesWriter writer_;
   std::filesystem::path output_dir_;

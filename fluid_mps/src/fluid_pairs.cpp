@@ -34,7 +34,7 @@ void FluidSystem::gather_state() {
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int k = 0; k < n; ++k) {
     const int i = order_[k];
-    x_[k] = positions_[i];
+    x_[k] = is_inactive(kinds_[i]) ? parked_position(i) : positions_[i];
     u_[k] = velocities_[i];
     acceleration_[k] = external_accelerations_[i];
     p_[k] = pressures_[i];
@@ -43,15 +43,17 @@ void FluidSystem::gather_state() {
 }
 
 // r*, u*, p and n* of the step become the public state; positions and velocities of inactive
-// particles are carried through unchanged by the stages.
+// particles stay as they were set.
 void FluidSystem::scatter_state() {
   const int n = particle_count();
   number_densities_.resize(n);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int k = 0; k < n; ++k) {
     const int i = order_[k];
-    positions_[i] = position_star_[k];
-    velocities_[i] = velocity_star_[k];
+    if (!is_inactive(kind_[k])) {  // an inactive particle keeps the position it was given
+      positions_[i] = position_star_[k];
+      velocities_[i] = velocity_star_[k];
+    }
     pressures_[i] = pressure_[k];
     number_densities_[i] = kind_[k] == ParticleKind::dummy ? kNotComputed : density_star_[k];
   }

@@ -214,13 +214,15 @@ std::optional<StabilityError> FluidSystem::instability(long step, int i) const {
 void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& position,
                                const Eigen::Vector3d& velocity) {
   if (i < 0 || i >= particle_count()) throw std::out_of_range("set_particle: bad index");
+  // The pair list stays valid (gather_state parks inactive particles out of reach, and the skin
+  // test catches a particle that enters) unless a dummy is involved: dummies have no rows.
+  if (kind == ParticleKind::dummy || kinds_[i] == ParticleKind::dummy) neighbours_valid_ = false;
   kinds_[i] = kind;
   positions_[i] = position;
   positions_[i] = parameters_.periodic.fold(position);
   velocities_[i] = velocity;
   pressures_[i] = 0.0;
   external_accelerations_[i].setZero();
-  neighbours_valid_ = false;  // the next stage searches again
 }
 
 void FluidSystem::set_velocity(int i, const Eigen::Vector3d& velocity) {

@@ -210,7 +210,17 @@ class FluidSystem {
   // (1 + 1e-12) cutoff^2: pairs are dropped on r^2 with a margin well above rounding; the stages
   // compare the distance itself with their radii.
   static double near_cutoff2(double cutoff) { return cutoff * cutoff * (1.0 + 1e-12); }
-  // The public arrays (particle order) into the internal ones (order_), and back.
+  // Where the stages see inactive particle i: far outside any domain (1e9 m, beyond the
+  // periodic axis too) and 1 km from any other, so that every pair a stale pair list still
+  // holds with it is out of reach. Then a particle leaving the flow (set_particle) needs no new
+  // neighbour search: it drops out of every stage's pairs at once, and a particle entering it
+  // has moved from there by far more than the skin, which triggers the search.
+  static Eigen::Vector3d parked_position(int i) {
+    const double far = 1e9 + 1e3 * static_cast<double>(i);
+    return Eigen::Vector3d(far, far, far);
+  }
+  // The public arrays (particle order) into the internal ones (order_), and back. Inactive
+  // particles enter the internal positions at parked_position(i), not at their own.
   void gather_state();
   void scatter_state();
   // phi_ (internal order) at r* from update_solid_fractions.
