@@ -172,7 +172,6 @@ TEST(MpsOpenBoundaries, LeavingParticlesKeepThePairListAndTheBits) {
   }
   EXPECT_EQ(differing, 0);
   std::cout << "[pair list kept] " << steps_after_leaving << " steps after particles left or "
-            << "dissolved, " << searched_after_leaving << " with a search; "
-            << steps_after_entering << " after a column was created, " << searched_after_entering
-            << " with a search\n";
+            << "dissolved, " << searched_after_leaving << " with a search; " << steps_after_entering
+            << " after a column was created, " << searched_after_entering << " with a search\n";
 }
