@@ -29,9 +29,21 @@ void visit_partners(const NeighbourList& list, const std::vector<Eigen::Vector3d
                     const PeriodicBoundary& periodic, int i, double cutoff, Visit&& visit) {
   const double cutoff2 = cutoff * cutoff * (1.0 + 1e-12);  // as FluidSystem::near_cutoff2
   const Eigen::Vector3d xi = x[i];
-  for (int k = list.begin(i); k < list.end(i); ++k) {
-    const int j = list.index[k];
-    const double r2 = periodic.wrap(x[j] - xi).squaredNorm();
+  const int* index = list.index.data();
+  const Eigen::Vector3d* position = x.data();
+  const int begin = list.begin(i), end = list.end(i);
+  if (periodic.enabled) {
+    for (int k = begin; k < end; ++k) {
+      const int j = index[k];
+      const double r2 = periodic.wrap(position[j] - xi).squaredNorm();
+      if (r2 <= cutoff2) visit(j, std::sqrt(r2));
+    }
+    return;
+  }
+  // The same distances without the periodic test in the loop.
+  for (int k = begin; k < end; ++k) {
+    const int j = index[k];
+    const double r2 = (position[j] - xi).squaredNorm();
     if (r2 <= cutoff2) visit(j, std::sqrt(r2));
   }
 }
@@ -122,12 +134,14 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
       position_star_[i] += dt * velocity_star_[i];
       continue;
     }
+    Eigen::Vector3d wall_laplacian = Eigen::Vector3d::Zero();  // the walls' share of it
+    const Eigen::Vector3d ui = u_[i];
     auto pair = [&](int j, double r) {
       if (mixed && r < c.re_n) density_sum += weight(r, c.re_n);
       if (!fluid || r >= c.re_l) return;
-      const Eigen::Vector3d term = (u_[j] - u_[i]) * weight(r, c.re_l);
+      const Eigen::Vector3d term = (u_[j] - ui) * weight(r, c.re_l);
       laplacian += term;
-      if (!is_fluid(kind_[j])) wall_viscous_[i] += term;
+      if (!is_fluid(kind_[j])) wall_laplacian += term;
     };
     if (masked) {
       for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
@@ -137,6 +151,7 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
       visit_partners(neighbours_, x_, p.periodic, i, cutoff, pair);
     }
     density_now_[i] = density_sum;
+    wall_viscous_[i] = wall_laplacian;
     if (fluid) {
       velocity_star_[i] +=
           dt * (viscous_factor * laplacian + p.gravity + c.driving + acceleration_[i]);
