@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <omp.h>
+
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/operators.hpp"
 #include "step_constants.hpp"
@@ -48,51 +50,75 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
 
 // Rows sum_j w_ij (p_i - p_j) + shift p_i of the unknowns (Laplacian model of radius `radius`):
 // Dirichlet neighbours (free surface, p = 0) only add to the diagonal; dummy particles are left
-// out.
+// out. One pass over the pairs: each thread writes its contiguous share of the rows into its own
+// buffer, and the buffers are copied into place once the row offsets are summed.
 void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift,
                                           SparseRows& matrix) {
   const NeighbourList& list = near_;
   const int m = static_cast<int>(unknown_particle_.size());
   fill(row_length_, static_cast<std::size_t>(m) + 1, std::int64_t{0});
-#pragma omp parallel for schedule(static) if (m >= 4096)
-  for (int row = 0; row < m; ++row) {
-    const int i = unknown_particle_[row];
-    std::int64_t count = 1;
-    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
-      if (unknown_[list.index[k]] >= 0 && list.distance[k] < radius) ++count;
-    }
-    row_length_[row + 1] = count;
-  }
-  for (int row = 0; row < m; ++row) row_length_[row + 1] += row_length_[row];
-  matrix.offset = row_length_;
+  const int threads = m >= 4096 ? std::max(1, omp_get_max_threads()) : 1;
+  if (static_cast<int>(assembly_buffers_.size()) < threads) assembly_buffers_.resize(threads);
   matrix.diagonal_first = true;  // below: the first slot, then zeros in its column
-  matrix.column.resize(row_length_[m]);
-  matrix.value.resize(row_length_[m]);
-#pragma omp parallel for schedule(static) if (m >= 4096)
-  for (int row = 0; row < m; ++row) {
-    const int i = unknown_particle_[row];
-    std::int64_t slot = matrix.offset[row];
-    const std::int64_t diagonal_slot = slot++;
-    double diagonal = diagonal_shift;
-    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
-      const int j = list.index[k];
-      if (kind_[j] == ParticleKind::dummy) continue;
-      const double w = weight(list.distance[k], radius);
-      if (w <= 0.0) continue;
-      diagonal += w;
-      if (unknown_[j] >= 0) {
-        matrix.column[slot] = unknown_[j];
-        matrix.value[slot] = -w;
-        ++slot;
+#pragma omp parallel num_threads(threads)
+  {
+    const int thread = omp_get_thread_num(), team = omp_get_num_threads();
+    const int first = static_cast<int>(static_cast<std::int64_t>(m) * thread / team);
+    const int last = static_cast<int>(static_cast<std::int64_t>(m) * (thread + 1) / team);
+    AssemblyBuffer& buffer = assembly_buffers_[thread];
+    // Room for every pair of the share and its diagonals; the buffers only grow.
+    std::int64_t room = 0;
+    for (int row = first; row < last; ++row) {
+      const int i = unknown_particle_[row];
+      room += near_end_[i] - list.offset[i] + 1;
+    }
+    if (static_cast<std::int64_t>(buffer.column.size()) < room) {
+      buffer.column.resize(room);
+      buffer.value.resize(room);
+    }
+    int* const column = buffer.column.data();
+    double* const value = buffer.value.data();
+    std::int64_t used = 0;
+    for (int row = first; row < last; ++row) {
+      const int i = unknown_particle_[row];
+      const std::int64_t diagonal_slot = used++;
+      double diagonal = diagonal_shift;
+      int rounded_away = 0;  // unknown partners inside the radius whose weight rounds to zero
+      for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
+        const int j = list.index[k];
+        if (kind_[j] == ParticleKind::dummy) continue;
+        const double w = weight(list.distance[k], radius);
+        if (w <= 0.0) {
+          if (unknown_[j] >= 0 && list.distance[k] < radius) ++rounded_away;
+          continue;
+        }
+        diagonal += w;
+        if (unknown_[j] >= 0) {
+          column[used] = unknown_[j];
+          value[used] = -w;
+          ++used;
+        }
       }
+      // Such a partner keeps a zero slot in the diagonal's column (the rows of the two-pass
+      // assembly this replaced had them: the same matrix, so the same bits).
+      for (int k = 0; k < rounded_away; ++k, ++used) {
+        column[used] = row;
+        value[used] = 0.0;
+      }
+      column[diagonal_slot] = row;
+      value[diagonal_slot] = diagonal;
+      row_length_[row + 1] = used - diagonal_slot;
     }
-    // Zero weight exactly at r = radius was counted in the first pass when distance < radius.
-    for (; slot < matrix.offset[row + 1]; ++slot) {
-      matrix.column[slot] = row;
-      matrix.value[slot] = 0.0;
+#pragma omp barrier
+#pragma omp single
+    {
+      for (int row = 0; row < m; ++row) row_length_[row + 1] += row_length_[row];
+      matrix.offset = row_length_;
+      matrix.column.resize(row_length_[m]);
+      matrix.value.resize(row_length_[m]);
     }
-    matrix.column[diagonal_slot] = row;
-    matrix.value[diagonal_slot] = diagonal;
+    std::copy(column, column + used, matrix.column.begin() + row_length_[first]);
+    std::copy(value, value + used, matrix.value.begin() + row_length_[first]);
   }
 }
 

@@ -281,6 +281,11 @@ class FluidSystem {
   std::vector<int> collided_, unknown_, unknown_particle_;
   std::vector<int> row_keys_;  // particle id of each pressure unknown (the aggregation's reuse)
   std::vector<std::int64_t> row_length_;
+  struct alignas(64) AssemblyBuffer {  // one thread's rows of assemble_laplacian_rows
+    std::vector<int> column;
+    std::vector<double> value;
+  };
+  std::vector<AssemblyBuffer> assembly_buffers_;
   SparseRows matrix_, hierarchy_matrix_;
   LatticeSums hierarchy_sums_;
 };
