@@ -253,12 +253,6 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   fill(divergence_, n, 0.0);
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (is_inactive(kind_[i])) {  // no pairs: a list built before it left may still hold some
-      near_end_[i] = list.offset[i];
-      density_star_[i] = 0.0;
-      divergence_[i] = 0.0;
-      continue;
-    }
     if (fused) find_near_row(i, position_star_, cutoff2, false);
     double sum = 0.0, divergence_sum = 0.0;
     for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {

@@ -218,7 +218,6 @@ void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& 
   // test catches a particle that enters) unless a dummy is involved: dummies have no rows.
   if (kind == ParticleKind::dummy || kinds_[i] == ParticleKind::dummy) neighbours_valid_ = false;
   kinds_[i] = kind;
-  positions_[i] = position;
   positions_[i] = parameters_.periodic.fold(position);
   velocities_[i] = velocity;
   pressures_[i] = 0.0;

@@ -1,9 +1,9 @@
 // The band solver of the Newton step, against a dense LU. The bending joint's kernel
-// (vegetation_beam/src/beam_elements.cpp): its stiffness and damping
-// blocks are minus the derivatives of its forces by the node positions and velocities (central
-// differences; by position at rest, since the Jacobian leaves out how the dashpot's force turns
-// with the links), and both matrices are symmetric, as the Newton Jacobian assumes: the blocks
-// off the diagonal are each other's transposes to the bit.
+// (vegetation_beam/src/beam_elements.cpp): its stiffness and damping blocks are minus the
+// derivatives of its forces by the node positions and velocities (central differences; by
+// position at rest, since the Jacobian leaves out how the dashpot's force turns with the links),
+// and both matrices are symmetric, as the Newton Jacobian assumes: the blocks off the diagonal
+// are each other's transposes to the bit.
 #include <gtest/gtest.h>
 
 #include <random>
