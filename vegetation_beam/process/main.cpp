@@ -189,6 +189,7 @@ class VegetationProcess final : public coupler::Solver {
     cutbacks_ += step.cutbacks;
     factorizations_ += step.factorizations;
     most_plants_in_contact_ = std::max(most_plants_in_contact_, step.most_plants_in_contact);
+    plant_by_plant_windows_ += step.plants_apart ? 1 : 0;
     last_drag_impulse_.setZero();
     for (const auto& drag : field_.window_mean_drag()) last_drag_impulse_ += drag * window.dt;
     drag_impulse_ += last_drag_impulse_;
@@ -223,6 +224,7 @@ class VegetationProcess final : public coupler::Solver {
     info["substep_cutbacks"] = cutbacks_;
     info["jacobian_factorizations"] = factorizations_;
     info["most_plants_in_contact"] = most_plants_in_contact_;
+    info["plant_by_plant_windows"] = plant_by_plant_windows_;  // this run's
     info["static_solve_iterations"] = start_.static_iterations;
     info["kinetic_energy"] = field_.kinetic_energy();
     // Impulse the fluid gave the plants; the last window's reaches the fluid after the run.
@@ -361,6 +363,8 @@ class VegetationProcess final : public coupler::Solver {
   int most_substeps_ = 0, most_newton_iterations_ = 0, newton_restarts_ = 0, cutbacks_ = 0;
   int64_t factorizations_ = 0;      // plant Jacobians factorised over the run
   int most_plants_in_contact_ = 0;  // since the start or the restart
+  // Windows solved plant by plant (no two plants could touch), in this run.
+  int64_t plant_by_plant_windows_ = 0;
   Eigen::Vector3d drag_impulse_ = Eigen::Vector3d::Zero(),
                   last_drag_impulse_ = Eigen::Vector3d::Zero();
   const std::vector<Eigen::Vector3d> held_forces_;  // the scene's loads after the start

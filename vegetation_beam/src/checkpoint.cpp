@@ -74,6 +74,7 @@ struct PlantFieldCheckpoint {
     f.accelerations_valid_ = flags[1] != 0;
     f.robust_first_ = flags[2] != 0;
     f.time_ = in.value<double>("plants.time");
+    f.clearance_valid_ = false;  // checked again at the next window (it decides no bits)
   }
 };
 

@@ -9,6 +9,7 @@
 
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
+#include "newmark_constants.hpp"
 #include "plant_messages.hpp"
 
 namespace cosim::vegetation {
@@ -94,6 +95,10 @@ PlantField::PlantField(std::vector<PlantSpec> plants, BeamParameters parameters)
   double max_radius = 0;
   for (const Plant& plant : plants_) max_radius = std::max(max_radius, plant.contact_radius);
   contact_margin_ = max_radius;
+  // A pair closer than reach + 4 radii at the last clearance check keeps the plants' windows
+  // synchronous; the others may drift 2 radii each within a window and a quarter of that
+  // between checks.
+  clearance_margin_ = 4 * contact_margin_;
 }
 
 std::pair<int, int> PlantField::node_range(int plant) const {
@@ -194,6 +199,7 @@ void PlantField::set_state(std::vector<Eigen::Vector3d> positions,
   }
   accelerations_valid_ = false;
   candidates_valid_ = false;
+  clearance_valid_ = false;
 }
 
 void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector3d>& x,
@@ -297,32 +303,38 @@ void PlantField::compute_forces(int plant_index, const std::vector<Eigen::Vector
 
 void PlantField::check_state(const std::vector<Eigen::Vector3d>& ambient) const {
   for (int p = 0; p < plant_count(); ++p) {
-    const Plant& plant = plants_[p];
-    double ambient_speed = 0;
-    for (int i = 0; i <= plant.links; ++i)
-      ambient_speed = std::max(ambient_speed, ambient[plant.first + i].norm());
-    const double speed_limit = plant.speed_limit + 10 * ambient_speed;
-    const auto when = [this] { return " at t = " + std::to_string(time_) + " s"; };
-    for (int i = 1; i <= plant.links; ++i) {
-      const int k = plant.first + i;
-      if (!finite(positions_[k]) || !finite(velocities_[k]))
-        throw StabilityError(plant_message(p, i, "position or velocity is NaN/inf" + when()));
-      const double speed = velocities_[k].norm();
-      if (speed > speed_limit) {
-        std::ostringstream what;
-        what << "runaway kinetic energy: speed " << speed << " m/s exceeds " << speed_limit
-             << " m/s (axial wave speed + 10 sqrt(g L) + 10 |ambient|)" << when();
-        throw StabilityError(plant_message(p, i, what.str()));
-      }
-      const double reach = (positions_[k] - positions_[plant.first]).norm();
-      if (reach > plant.reach_limit) {
-        std::ostringstream what;
-        what << "node escaped: distance from base " << reach
-             << " m exceeds 1.5 length = " << plant.reach_limit << " m" << when();
-        throw StabilityError(plant_message(p, i, what.str()));
-      }
+    if (std::string problem = state_problem(p, ambient); !problem.empty())
+      throw StabilityError(std::move(problem));
+  }
+}
+
+std::string PlantField::state_problem(int p, const std::vector<Eigen::Vector3d>& ambient) const {
+  const Plant& plant = plants_[p];
+  double ambient_speed = 0;
+  for (int i = 0; i <= plant.links; ++i)
+    ambient_speed = std::max(ambient_speed, ambient[plant.first + i].norm());
+  const double speed_limit = plant.speed_limit + 10 * ambient_speed;
+  const auto when = [this] { return " at t = " + std::to_string(time_) + " s"; };
+  for (int i = 1; i <= plant.links; ++i) {
+    const int k = plant.first + i;
+    if (!finite(positions_[k]) || !finite(velocities_[k]))
+      return plant_message(p, i, "position or velocity is NaN/inf" + when());
+    const double speed = velocities_[k].norm();
+    if (speed > speed_limit) {
+      std::ostringstream what;
+      what << "runaway kinetic energy: speed " << speed << " m/s exceeds " << speed_limit
+           << " m/s (axial wave speed + 10 sqrt(g L) + 10 |ambient|)" << when();
+      return plant_message(p, i, what.str());
+    }
+    const double reach = (positions_[k] - positions_[plant.first]).norm();
+    if (reach > plant.reach_limit) {
+      std::ostringstream what;
+      what << "node escaped: distance from base " << reach
+           << " m exceeds 1.5 length = " << plant.reach_limit << " m" << when();
+      return plant_message(p, i, what.str());
     }
   }
+  return {};
 }
 
 WindowReport PlantField::advance(double window_dt,
@@ -343,21 +355,34 @@ WindowReport PlantField::advance(double window_dt,
   report.substep = window_dt / report.substeps;
   if (!accelerations_valid_) initialise_accelerations(ambient_begin);
 
-  std::vector<Eigen::Vector3d> ambient(ambient_begin), previous_ambient(n);
   std::vector<Eigen::Vector3d> impulse(n, Eigen::Vector3d::Zero());
   const double start = time_;
   robust_first_ = false;
-  // Each window starts from fresh Jacobians, so a run restarted at a window boundary (or a
-  // window repeated by an implicit scheme) takes the same steps as the straight run.
-  std::fill(jacobian_dt_.begin(), jacobian_dt_.end(), 0.0);
-  for (int step = 1; step <= report.substeps; ++step) {
-    const double s = static_cast<double>(step) / report.substeps;
-    std::swap(ambient, previous_ambient);
-    for (std::size_t k = 0; k < n; ++k)
-      ambient[k] = (1 - s) * ambient_begin[k] + s * ambient_end[k];
-    substep(time_, report.substep, previous_ambient, ambient, 0, impulse, report);
-    time_ = start + s * window_dt;
-    check_state(ambient);
+  // Plant by plant when no two can touch (plant_field_apart.cpp), but not right after a window
+  // that needed the robust attempt (this one likely does too, and would be solved twice), and
+  // not when the sub-steps' start positions it keeps would exceed kApartMostKeptPositions.
+  const bool contact = parameters_.contact && plant_count() > 1;
+  const long long kept_positions =
+      contact ? static_cast<long long>(report.substeps - 1) * static_cast<long long>(n) : 0;
+  if (parameters_.plants_apart_windows && !parameters_.rigid && !last_window_robust_ &&
+      kept_positions <= kApartMostKeptPositions && plants_clear() &&
+      advance_plants_apart(ambient_begin, ambient_end, impulse, report)) {
+    time_ = start + window_dt;
+  } else {
+    // Each window starts from fresh Jacobians, so a run restarted at a window boundary (or a
+    // window repeated by an implicit scheme) takes the same steps as the straight run.
+    std::fill(jacobian_dt_.begin(), jacobian_dt_.end(), 0.0);
+    std::vector<Eigen::Vector3d> ambient(ambient_begin), previous_ambient(n);
+    for (int step = 1; step <= report.substeps; ++step) {
+      const double s = static_cast<double>(step) / report.substeps;
+      std::swap(ambient, previous_ambient);
+      for (std::size_t k = 0; k < n; ++k)
+        ambient[k] = (1 - s) * ambient_begin[k] + s * ambient_end[k];
+      substep(time_, report.substep, previous_ambient, ambient, 0, impulse, report);
+      time_ = start + s * window_dt;
+      check_state(ambient);
+    }
+    last_window_robust_ = robust_first_;
   }
   for (std::size_t k = 0; k < n; ++k) window_mean_drag_[k] = impulse[k] / window_dt;
   return report;

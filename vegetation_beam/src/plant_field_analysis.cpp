@@ -2,13 +2,13 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
@@ -25,28 +25,81 @@ std::uint64_t cell_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
          ((static_cast<std::uint64_t>(iz) & mask) << 42);
 }
 
+// The run [begin, end) of each cell key in a key-sorted list, by open addressing (linear
+// probing in a table at least twice the list's size): no allocation per cell, as a node-based
+// map needs, at every rebuild of the candidates.
+class CellRuns {
+ public:
+  explicit CellRuns(const std::vector<std::pair<std::uint64_t, int>>& keyed) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * keyed.size()) capacity *= 2;
+    shift_ = 64 - std::countr_zero(capacity);
+    slots_.assign(capacity, Slot{});
+    for (std::size_t k = 0; k < keyed.size();) {
+      std::size_t end = k + 1;
+      while (end < keyed.size() && keyed[end].first == keyed[k].first) ++end;
+      std::size_t slot = home(keyed[k].first);
+      while (slots_[slot].key != kEmpty) slot = (slot + 1) & (capacity - 1);
+      slots_[slot] = Slot{keyed[k].first, k, end};
+      k = end;
+    }
+  }
+  std::pair<std::size_t, std::size_t> find(std::uint64_t key) const {
+    for (std::size_t slot = home(key);; slot = (slot + 1) & (slots_.size() - 1)) {
+      if (slots_[slot].key == key) return {slots_[slot].begin, slots_[slot].end};
+      if (slots_[slot].key == kEmpty) return {0, 0};
+    }
+  }
+
+ private:
+  // cell_key uses 63 bits: the all-ones key marks an empty slot.
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  struct Slot {
+    std::uint64_t key = kEmpty;
+    std::size_t begin = 0, end = 0;
+  };
+  std::size_t home(std::uint64_t key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);  // Fibonacci hash
+  }
+  int shift_ = 0;
+  std::vector<Slot> slots_;
+};
+
 }  // namespace
 
 void PlantField::update_contact_candidates() {
-  const std::size_t n = positions_.size();
+  update_contact_candidates(positions_);
+}
+
+void PlantField::update_contact_candidates(std::span<const Eigen::Vector3d> x) {
+  const std::size_t n = x.size();
   if (candidates_valid_) {
     // The list holds every pair within reach + margin; it stays complete while no node has
     // moved more than half the margin.
     double moved = 0;
     for (std::size_t k = 0; k < n; ++k)
-      moved = std::max(moved, (positions_[k] - candidate_positions_[k]).squaredNorm());
+      moved = std::max(moved, (x[k] - candidate_positions_[k]).squaredNorm());
     if (std::sqrt(moved) < 0.5 * contact_margin_) return;
   }
-  candidate_positions_ = positions_;
+  candidate_positions_.assign(x.begin(), x.end());
   candidates_valid_ = true;
   contact_candidates_.clear();
+  for_each_close_pair(candidate_positions_, contact_margin_, [&](int a, int b) {
+    contact_candidates_.emplace_back(a, b);
+    return true;
+  });
+}
+
+void PlantField::for_each_close_pair(const std::vector<Eigen::Vector3d>& x, double margin,
+                                     const std::function<bool(int, int)>& visit) const {
+  const std::size_t n = x.size();
   double max_radius = 0;
   for (double r : contact_radius_) max_radius = std::max(max_radius, r);
-  const double cell = 2 * max_radius + contact_margin_;
+  const double cell = 2 * max_radius + margin;
   std::vector<std::pair<std::uint64_t, int>> keyed(n);
   std::vector<Eigen::Vector3i> cells(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3d scaled = positions_[k] / cell;
+    const Eigen::Vector3d scaled = x[k] / cell;
     cells[k] = Eigen::Vector3i(static_cast<int>(std::floor(scaled.x())),
                                static_cast<int>(std::floor(scaled.y())),
                                static_cast<int>(std::floor(scaled.z())));
@@ -55,31 +108,24 @@ void PlantField::update_contact_candidates() {
   std::sort(keyed.begin(), keyed.end());
   // Each occupied cell's run in `keyed`, found by hash: most of a node's 27 neighbour cells are
   // empty, and a binary search over all nodes for each took a fifth of a reed field's time.
-  std::unordered_map<std::uint64_t, std::pair<std::size_t, std::size_t>> runs;
-  runs.reserve(n);
-  for (std::size_t k = 0; k < n;) {
-    std::size_t end = k + 1;
-    while (end < n && keyed[end].first == keyed[k].first) ++end;
-    runs.emplace(keyed[k].first, std::pair{k, end});
-    k = end;
-  }
+  const CellRuns runs(keyed);
   for (std::size_t a = 0; a < n; ++a) {
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
           const std::uint64_t key =
               cell_key(cells[a].x() + dx, cells[a].y() + dy, cells[a].z() + dz);
-          const auto run = runs.find(key);
-          if (run == runs.end()) continue;
-          for (std::size_t t = run->second.first; t < run->second.second; ++t) {
+          const auto [run_begin, run_end] = runs.find(key);
+          for (std::size_t t = run_begin; t < run_end; ++t) {
             const std::size_t b = static_cast<std::size_t>(keyed[t].second);
             if (b <= a || node_plant_[a] == node_plant_[b]) continue;
             const bool a_base = plants_[node_plant_[a]].first == static_cast<int>(a);
             const bool b_base = plants_[node_plant_[b]].first == static_cast<int>(b);
             if (a_base && b_base) continue;  // two clamped nodes never move
-            const double reach = contact_radius_[a] + contact_radius_[b] + contact_margin_;
-            if ((positions_[a] - positions_[b]).squaredNorm() < reach * reach)
-              contact_candidates_.emplace_back(static_cast<int>(a), static_cast<int>(b));
+            const double reach = contact_radius_[a] + contact_radius_[b] + margin;
+            if ((x[a] - x[b]).squaredNorm() < reach * reach &&
+                !visit(static_cast<int>(a), static_cast<int>(b)))
+              return;
           }
         }
       }
@@ -90,17 +136,10 @@ void PlantField::update_contact_candidates() {
 void PlantField::compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
                                         const std::vector<Eigen::Vector3d>& v,
                                         bool decide_active_pairs) {
-  for (int k : contact_touched_nodes_) {
-    contact_forces_[k].setZero();
-    contact_stiffness_blocks_[k].setZero();
-    contact_damping_blocks_[k].setZero();
-  }
-  contact_touched_nodes_.clear();
-  std::fill(plant_in_contact_.begin(), plant_in_contact_.end(), 0);
   if (decide_active_pairs) {
-    contact_active_.assign(contact_candidates_.size(), 0);
-    plant_contact_pairs_.resize(plants_.size());
-    for (auto& pairs : plant_contact_pairs_) pairs.clear();
+    clear_contact_state();
+  } else {
+    clear_contact_forces();
   }
   for (std::size_t pair = 0; pair < contact_candidates_.size(); ++pair) {
     const auto [a, b] = contact_candidates_[pair];
@@ -130,6 +169,23 @@ void PlantField::compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
       plant_in_contact_[node_plant_[node]] = 1;
     }
   }
+}
+
+void PlantField::clear_contact_forces() {
+  for (int k : contact_touched_nodes_) {
+    contact_forces_[k].setZero();
+    contact_stiffness_blocks_[k].setZero();
+    contact_damping_blocks_[k].setZero();
+  }
+  contact_touched_nodes_.clear();
+  std::fill(plant_in_contact_.begin(), plant_in_contact_.end(), 0);
+}
+
+void PlantField::clear_contact_state() {
+  clear_contact_forces();
+  contact_active_.assign(contact_candidates_.size(), 0);
+  plant_contact_pairs_.resize(plants_.size());
+  for (auto& pairs : plant_contact_pairs_) pairs.clear();
 }
 
 void PlantField::refresh_contact_forces(int plant_index, double dt) {

@@ -11,19 +11,15 @@
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
+#include "newmark_constants.hpp"
 #include "plant_messages.hpp"
 
 namespace cosim::vegetation {
 namespace {
 
-constexpr double kBeta = 0.25;  // Newmark average acceleration (seed eq. 22-23)
-constexpr double kGamma = 0.5;
 constexpr int kHalfBandwidth = 8;  // 3 dofs per node, bending couples neighbours two apart
 // A sub-step whose Newton attempts both fail is halved, at most this often (down to 1/64).
 constexpr int kMaxCutbacks = 6;
-// From this many plants the Newton iterations of plants out of contact run side by side (OpenMP);
-// under it the fork and join cost more than the work.
-constexpr int kPlantsSideBySide = 16;
 
 }  // namespace
 
@@ -98,8 +94,12 @@ void PlantField::locate_largest_residual(const std::vector<char>& converged,
 }
 
 void PlantField::newmark_kinematics(double dt, double mass_weight) {
+  for (const Plant& plant : plants_) newmark_kinematics_of(plant, dt, mass_weight);
+}
+
+void PlantField::newmark_kinematics_of(const Plant& plant, double dt, double mass_weight) {
   // Newmark relations (eq. 22-23) give acceleration and velocity from the trial position.
-  for (std::size_t k = 0; k < positions_.size(); ++k) {
+  for (int k = plant.first + 1; k <= plant.first + plant.links; ++k) {
     if (node_mass_[k] == 0) continue;
     accelerations_[k] =
         (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) * mass_weight -
@@ -107,10 +107,8 @@ void PlantField::newmark_kinematics(double dt, double mass_weight) {
     velocities_[k] = previous_velocities_[k] +
                      dt * ((1 - kGamma) * previous_accelerations_[k] + kGamma * accelerations_[k]);
   }
-  for (const Plant& plant : plants_) {  // clamped base
-    accelerations_[plant.first].setZero();
-    velocities_[plant.first].setZero();
-  }
+  accelerations_[plant.first].setZero();  // clamped base
+  velocities_[plant.first].setZero();
 }
 
 // One Newton iteration of one plant: its residual, the Jacobian when due, and the correction.

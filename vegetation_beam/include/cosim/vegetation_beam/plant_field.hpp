@@ -8,6 +8,8 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <concepts>
+#include <functional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -55,6 +57,10 @@ struct BeamParameters {
   // A plant out of contact keeps its factorised Jacobian over the window's later sub-steps of
   // the same length (modified Newton across sub-steps); each window starts with a fresh one.
   bool reuse_jacobian = true;
+  // Not a scenario key: a window in which no two plants can touch is solved plant by plant over
+  // all its sub-steps (side by side on the threads); false keeps the sub-step-synchronous path
+  // for every window (tests compare the two bit for bit).
+  bool plants_apart_windows = true;
 };
 
 // The keys of one `plants` entry (count and spacing aside), declared once for the parser, the
@@ -189,6 +195,7 @@ struct WindowReport {
   int factorizations = 0;          // plant Jacobians factorised (one per plant and sub-step
                                    // without reuse_jacobian)
   int most_plants_in_contact = 0;  // in any sub-step (they are solved one after another)
+  bool plants_apart = false;       // solved plant by plant over the whole window (advance())
 };
 
 // A linear vibration mode of one plant about its current shape.
@@ -357,7 +364,33 @@ class PlantField {
   // Plant and node with the largest residual among the plants not `converged`.
   void locate_largest_residual(const std::vector<char>& converged, NewtonOutcome& outcome) const;
   void check_state(const std::vector<Eigen::Vector3d>& ambient) const;
+  // What check_state would throw for plant p, or empty.
+  std::string state_problem(int plant, const std::vector<Eigen::Vector3d>& ambient) const;
+  void newmark_kinematics_of(const Plant& plant, double dt, double mass_weight);
+  // Plants apart (plant_field_apart.cpp): whether no two plants can touch while every node stays
+  // within a quarter of clearance_margin_ of where this was last checked.
+  bool plants_clear();
+  // The window plant by plant; false (the state then as at the window's start) when a plant's
+  // fast Newton attempt fails, its state check fails or a node drifts too far to rule out a
+  // contact: advance() then solves the window sub-step by sub-step.
+  bool advance_plants_apart(const std::vector<Eigen::Vector3d>& ambient_begin,
+                            const std::vector<Eigen::Vector3d>& ambient_end,
+                            std::vector<Eigen::Vector3d>& impulse, WindowReport& report);
+  struct ApartWindow;  // what the plants of an apart window share (plant_field_apart.cpp)
+  // One plant over the window; false when its fast attempt or its state check fails, or a node
+  // drifts too far from clearance_positions_.
+  bool advance_plant_apart(int plant, const ApartWindow& window, std::vector<double>& scratch);
+  // The contact bookkeeping the sub-step-synchronous path would leave after the apart window:
+  // its candidate updates at each sub-step's start, and no pair active.
+  void settle_contact_state(int substeps);
+  void clear_contact_forces();  // no contact force, no plant in contact
+  void clear_contact_state();   // the same, and no pair active
+  // visit(a, b) for each node pair of different plants (not two clamped bases) closer than
+  // their contact radii plus `margin` at x, a < b in node order; stops when visit returns false.
+  void for_each_close_pair(const std::vector<Eigen::Vector3d>& x, double margin,
+                           const std::function<bool(int, int)>& visit) const;
   void update_contact_candidates();
+  void update_contact_candidates(std::span<const Eigen::Vector3d> x);
   void compute_contact_forces(const std::vector<Eigen::Vector3d>& x,
                               const std::vector<Eigen::Vector3d>& v, bool decide_active_pairs);
   // Recomputes the contact forces on one plant's nodes from its active pairs at the current
@@ -421,6 +454,14 @@ class PlantField {
   std::vector<char> plant_in_contact_;
   double contact_stiffness_ = 0, contact_damping_ = 0, contact_margin_ = 0;
   bool candidates_valid_ = false;
+  // Plants apart: positions of the last clearance check, its margin and outcome; the window's
+  // start state (restored when an apart window falls back) and its sub-steps' start positions.
+  std::vector<Eigen::Vector3d> clearance_positions_;
+  double clearance_margin_ = 0;
+  bool clearance_valid_ = false, plants_clear_ = false;
+  bool last_window_robust_ = false;  // the last window needed the robust attempt
+  std::vector<Eigen::Vector3d> start_positions_, start_velocities_, start_accelerations_;
+  std::vector<Eigen::Vector3d> start_drag_, substep_starts_;
   bool accelerations_valid_ = false;
   double time_ = 0;
 };
