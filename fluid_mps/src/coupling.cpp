@@ -24,42 +24,17 @@ struct PointGroups {
   }
 };
 
-// The groups, found with one cell grid over the fluid particles within reach of the points'
-// bounding box only (copied out in index order): walls, dummies, the parked pool and the water
-// far from the points (a plant field, a log usually covers a small part of the domain) never
-// enter it. A periodic run keeps the whole period (the seam). Each thread queries a contiguous
+// The groups, from the kept grid (FluidSystem::point_grid). Each thread queries a contiguous
 // range of points into its own buffer, joined in point order: no allocation per group (the
 // groups' own vectors, allocated and freed by different threads, kept two threads slower than
 // one).
-PointGroups fluid_within(const MpsParameters& p, const std::vector<Eigen::Vector3d>& positions,
-                         const std::vector<ParticleKind>& kinds,
-                         const std::vector<Eigen::Vector3d>& points, double radius) {
-  if (!(radius > 0.0)) throw std::invalid_argument("sampling radius must be positive");
+template <class Grid>
+PointGroups groups_within(const Grid& near, const std::vector<Eigen::Vector3d>& points,
+                          double radius) {
   const int count = static_cast<int>(points.size());
   PointGroups groups;
   groups.offset.assign(points.size() + 1, 0);
-  if (points.empty()) return groups;
-  double cell = std::max(radius, 2.0 * p.particle_spacing);
-  // Periodic runs: at least three cells per period; query() then reaches over several cells.
-  if (p.periodic.enabled) cell = std::min(cell, p.periodic.length() / 3.0);
-  Eigen::AlignedBox3d reach(points.front());
-  for (const auto& x : points) reach.extend(x);
-  reach.min().array() -= radius;
-  reach.max().array() += radius;
-  std::vector<int> inside;  // particle index of each grid entry, increasing
-  std::vector<Eigen::Vector3d> at;
-  for (int i = 0; i < static_cast<int>(positions.size()); ++i) {
-    if (kinds[i] != ParticleKind::fluid) continue;
-    Eigen::Vector3d x = positions[i];
-    if (p.periodic.enabled) x.x() = reach.min().x();  // any x is within reach across the seam
-    if (p.dimension == 2) x.z() = reach.min().z();
-    if (!reach.contains(x)) continue;
-    inside.push_back(i);
-    at.push_back(positions[i]);
-  }
-  if (inside.empty()) return groups;
-  NeighbourGrid grid(p.dimension, bounding_box(at, p.dimension, cell), cell, p.periodic);
-  grid.build(at);
+  if (points.empty() || near.inside.empty()) return groups;
   const int team = count >= 64 ? std::max(1, omp_get_max_threads()) : 1;
   std::vector<std::vector<int>> found_by_thread(team);
 #pragma omp parallel num_threads(team)
@@ -70,9 +45,9 @@ PointGroups fluid_within(const MpsParameters& p, const std::vector<Eigen::Vector
     std::vector<int>& mine = found_by_thread[thread];
     std::vector<int> found;
     for (int q = first; q < last; ++q) {
-      grid.query(at, points[q], radius, found);
+      near.grid->query(near.at, points[q], radius, found);
       std::sort(found.begin(), found.end());  // grid entries in index order: particles too
-      for (const int k : found) mine.push_back(inside[k]);
+      for (const int k : found) mine.push_back(near.inside[k]);
       groups.offset[q + 1] = static_cast<std::int64_t>(found.size());
     }
 #pragma omp barrier
@@ -88,9 +63,54 @@ PointGroups fluid_within(const MpsParameters& p, const std::vector<Eigen::Vector
 
 }  // namespace
 
+// One cell grid over the fluid particles within reach of the points' bounding box (copied out in
+// index order): walls, dummies, the parked pool and the water far from the points (a plant
+// field, a log usually covers a small part of the domain) never enter it. A periodic run keeps
+// the whole period (the seam). The box is padded by the radius, so that points moved a little
+// (a plant's nodes between its samples and its forces) still find the grid complete; the groups
+// are all particles within the radius, in index order, whatever grid finds them.
+const FluidSystem::PointGrid& FluidSystem::point_grid(const std::vector<Eigen::Vector3d>& points,
+                                                      double radius) const {
+  if (!(radius > 0.0)) throw std::invalid_argument("sampling radius must be positive");
+  PointGrid& near = point_grid_;
+  if (points.empty()) return near;
+  const MpsParameters& p = parameters_;
+  Eigen::AlignedBox3d reach(points.front());
+  for (const auto& x : points) reach.extend(x);
+  const bool kept =
+      near.generation == state_generation_ && near.radius == radius && near.reach.contains(reach);
+  if (kept) return near;
+  reach.min().array() -= 2.0 * radius;
+  reach.max().array() += 2.0 * radius;
+  near.generation = state_generation_;
+  near.radius = radius;
+  near.reach = reach;
+  near.reach.min().array() += radius;  // points within it have their whole disc in `reach`
+  near.reach.max().array() -= radius;
+  near.inside.clear();
+  near.at.clear();
+  near.grid.reset();
+  for (int i = 0; i < static_cast<int>(positions_.size()); ++i) {
+    if (kinds_[i] != ParticleKind::fluid) continue;
+    Eigen::Vector3d x = positions_[i];
+    if (p.periodic.enabled) x.x() = reach.min().x();  // any x is within reach across the seam
+    if (p.dimension == 2) x.z() = reach.min().z();
+    if (!reach.contains(x)) continue;
+    near.inside.push_back(i);
+    near.at.push_back(positions_[i]);
+  }
+  if (near.inside.empty()) return near;
+  double cell = std::max(radius, 2.0 * p.particle_spacing);
+  // Periodic runs: at least three cells per period; query() then reaches over several cells.
+  if (p.periodic.enabled) cell = std::min(cell, p.periodic.length() / 3.0);
+  near.grid.emplace(p.dimension, bounding_box(near.at, p.dimension, cell), cell, p.periodic);
+  near.grid->build(near.at);
+  return near;
+}
+
 std::vector<std::vector<int>> FluidSystem::fluid_particles_near(
     const std::vector<Eigen::Vector3d>& points, double radius) const {
-  const PointGroups groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+  const PointGroups groups = groups_within(point_grid(points, radius), points, radius);
   std::vector<std::vector<int>> result(points.size());
   for (std::size_t q = 0; q < points.size(); ++q) {
     result[q].assign(groups.index.begin() + groups.offset[q],
@@ -102,7 +122,7 @@ std::vector<std::vector<int>> FluidSystem::fluid_particles_near(
 std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
     const std::vector<Eigen::Vector3d>& points, double radius,
     std::vector<double>* water_fraction) const {
-  const auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+  const auto groups = groups_within(point_grid(points, radius), points, radius);
   // Particles of a full lattice centred on a particle, within the radius (itself included).
   const double full =
       fill_lattice_sums(parameters_, radius / parameters_.particle_spacing).neighbour_count + 1.0;
@@ -141,7 +161,7 @@ ForceDelivery FluidSystem::set_point_forces(
       throw std::invalid_argument("set_point_forces: points and forces differ in size");
     }
     if (points.empty()) continue;
-    const auto groups = fluid_within(parameters_, positions_, kinds_, points, radius);
+    const auto groups = groups_within(point_grid(points, radius), points, radius);
     // Serial accumulation in point order: deterministic.
     for (std::size_t q = 0; q < points.size(); ++q) {
       const std::size_t size = groups.size(q);

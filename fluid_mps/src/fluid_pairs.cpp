@@ -46,6 +46,7 @@ void FluidSystem::gather_state() {
 // particles stay as they were set.
 void FluidSystem::scatter_state() {
   const int n = particle_count();
+  ++state_generation_;
   number_densities_.resize(n);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int k = 0; k < n; ++k) {

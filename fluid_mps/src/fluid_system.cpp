@@ -217,6 +217,7 @@ void FluidSystem::set_particle(int i, ParticleKind kind, const Eigen::Vector3d& 
   // The pair list stays valid (gather_state parks inactive particles out of reach, and the skin
   // test catches a particle that enters) unless a dummy is involved: dummies have no rows.
   if (kind == ParticleKind::dummy || kinds_[i] == ParticleKind::dummy) neighbours_valid_ = false;
+  ++state_generation_;  // the coupling hooks' kept grid (point_grid) is out of date
   kinds_[i] = kind;
   positions_[i] = parameters_.periodic.fold(position);
   velocities_[i] = velocity;

@@ -196,6 +196,52 @@ TEST(MpsFluidSystem, FluidParticlesNearPointsAreTheFluidWithinTheRadius) {
   }
 }
 
+// The coupling hooks keep their grid of the fluid near the points while no particle moves or
+// changes kind. After a step, after a particle is moved or made inactive or fluid, and for points
+// moved within and beyond the kept reach, the groups are still exactly the fluid within the
+// radius (a stale grid misses the moved particle, or keeps the one that left).
+TEST(MpsFluidSystem, KeptPointGridFollowsEveryChangeOfTheFluid) {
+  MpsParameters tank = small_parameters();
+  const double l0 = tank.particle_spacing, radius = 2.0 * l0;
+  FluidSystem system(tank, still_water_tank(tank, 0.2, 0.1, 0.2));
+  auto brute_force = [&](const Eigen::Vector3d& point) {
+    std::vector<int> found;
+    for (int i = 0; i < system.particle_count(); ++i) {
+      if (system.kinds()[i] == ParticleKind::fluid &&
+          (system.positions()[i] - point).squaredNorm() < radius * radius)
+        found.push_back(i);
+    }
+    return found;
+  };
+  std::vector<Eigen::Vector3d> points = {{0.05, 0.05, 0.0}, {0.1, 0.05, 0.0}};
+  auto expect_exact = [&](const char* after) {
+    const auto groups = system.fluid_particles_near(points, radius);
+    for (std::size_t q = 0; q < points.size(); ++q)
+      EXPECT_EQ(groups[q], brute_force(points[q])) << "point " << q << " after " << after;
+  };
+  expect_exact("the first query");
+  // A far fluid particle moved onto the first point.
+  int far = -1;
+  for (int i = 0; i < system.particle_count() && far < 0; ++i) {
+    if (system.kinds()[i] == ParticleKind::fluid && system.positions()[i].x() > 0.18) far = i;
+  }
+  ASSERT_GE(far, 0);
+  system.set_particle(far, ParticleKind::fluid, points[0] + Eigen::Vector3d(0.3 * l0, 0, 0),
+                      Eigen::Vector3d::Zero());
+  expect_exact("a particle moved in");
+  ASSERT_NE(std::find(brute_force(points[0]).begin(), brute_force(points[0]).end(), far),
+            brute_force(points[0]).end());
+  system.set_particle(far, ParticleKind::inactive, Eigen::Vector3d(0.5, -0.5, 0),
+                      Eigen::Vector3d::Zero());
+  expect_exact("the particle left the flow");
+  system.step(system.stable_dt());
+  expect_exact("a step");
+  for (auto& point : points) point.x() += 0.5 * radius;  // within the kept reach
+  expect_exact("the points moved a little");
+  for (auto& point : points) point.x() += 4.0 * radius;  // beyond it
+  expect_exact("the points moved far");
+}
+
 // Two fluid particles approaching closer than d_c: the collision model keeps momentum and
 // leaves them separating at C_c times the approach speed (seed 001 eq. (11)).
 TEST(MpsFluidSystem, CollisionConservesMomentumAndAppliesRestitution) {

@@ -288,6 +288,22 @@ class FluidSystem {
   std::vector<AssemblyBuffer> assembly_buffers_;
   SparseRows matrix_, hierarchy_matrix_;
   LatticeSums hierarchy_sums_;
+
+  // Coupling hooks (coupling.cpp): the cell grid of the fluid particles near the solids' points,
+  // kept while no particle has moved or changed kind (state_generation_), so that the forces
+  // set before a step use the grid of the samples taken after the last one.
+  struct PointGrid {
+    std::uint64_t generation = 0;  // state_generation_ when built; 0: none
+    double radius = 0;
+    Eigen::AlignedBox3d reach;  // points within it (and the radius) find all their particles
+    std::vector<int> inside;    // particle index of each grid entry, increasing
+    std::vector<Eigen::Vector3d> at;
+    std::optional<NeighbourGrid> grid;
+  };
+  // The grid for `points` (radius `radius`), built again only when needed.
+  const PointGrid& point_grid(const std::vector<Eigen::Vector3d>& points, double radius) const;
+  mutable PointGrid point_grid_;
+  std::uint64_t state_generation_ = 1;  // bumped whenever a particle moves or changes kind
 };
 
 // A particle's pressure carried hydrostatically over `to_point` (from the particle to the point
