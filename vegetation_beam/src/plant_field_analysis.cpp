@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <omp.h>
+
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
@@ -24,6 +26,9 @@ std::uint64_t cell_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
   return (static_cast<std::uint64_t>(ix) & mask) | ((static_cast<std::uint64_t>(iy) & mask) << 21) |
          ((static_cast<std::uint64_t>(iz) & mask) << 42);
 }
+
+// From this many nodes the close pairs are found on all threads (each a range of nodes).
+constexpr std::size_t kClosePairsSideBySide = 2048;
 
 // The run [begin, end) of each cell key in a key-sorted list, by open addressing (linear
 // probing in a table at least twice the list's size): no allocation per cell, as a node-based
@@ -109,26 +114,39 @@ void PlantField::for_each_close_pair(const std::vector<Eigen::Vector3d>& x, doub
   // Each occupied cell's run in `keyed`, found by hash: most of a node's 27 neighbour cells are
   // empty, and a binary search over all nodes for each took a fifth of a reed field's time.
   const CellRuns runs(keyed);
-  for (std::size_t a = 0; a < n; ++a) {
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
-          const std::uint64_t key =
-              cell_key(cells[a].x() + dx, cells[a].y() + dy, cells[a].z() + dz);
-          const auto [run_begin, run_end] = runs.find(key);
-          for (std::size_t t = run_begin; t < run_end; ++t) {
-            const std::size_t b = static_cast<std::size_t>(keyed[t].second);
-            if (b <= a || node_plant_[a] == node_plant_[b]) continue;
-            const bool a_base = plants_[node_plant_[a]].first == static_cast<int>(a);
-            const bool b_base = plants_[node_plant_[b]].first == static_cast<int>(b);
-            if (a_base && b_base) continue;  // two clamped nodes never move
-            const double reach = contact_radius_[a] + contact_radius_[b] + margin;
-            if ((x[a] - x[b]).squaredNorm() < reach * reach &&
-                !visit(static_cast<int>(a), static_cast<int>(b)))
-              return;
+  // Each thread finds the pairs of a contiguous range of nodes a; visited in node order after.
+  const int team = n >= kClosePairsSideBySide ? std::max(1, omp_get_max_threads()) : 1;
+  std::vector<std::vector<std::pair<int, int>>> found(team);
+#pragma omp parallel num_threads(team)
+  {
+    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
+    std::vector<std::pair<int, int>>& mine = found[thread];
+    const std::size_t first = n * thread / threads, last = n * (thread + 1) / threads;
+    for (std::size_t a = first; a < last; ++a) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dz = -1; dz <= 1; ++dz) {
+            const std::uint64_t key =
+                cell_key(cells[a].x() + dx, cells[a].y() + dy, cells[a].z() + dz);
+            const auto [run_begin, run_end] = runs.find(key);
+            for (std::size_t t = run_begin; t < run_end; ++t) {
+              const std::size_t b = static_cast<std::size_t>(keyed[t].second);
+              if (b <= a || node_plant_[a] == node_plant_[b]) continue;
+              const bool a_base = plants_[node_plant_[a]].first == static_cast<int>(a);
+              const bool b_base = plants_[node_plant_[b]].first == static_cast<int>(b);
+              if (a_base && b_base) continue;  // two clamped nodes never move
+              const double reach = contact_radius_[a] + contact_radius_[b] + margin;
+              if ((x[a] - x[b]).squaredNorm() < reach * reach)
+                mine.emplace_back(static_cast<int>(a), static_cast<int>(b));
+            }
           }
         }
       }
+    }
+  }
+  for (const auto& part : found) {
+    for (const auto& [a, b] : part) {
+      if (!visit(a, b)) return;
     }
   }
 }
