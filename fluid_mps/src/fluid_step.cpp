@@ -120,12 +120,17 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   const double cutoff = mixed ? std::max(c.re_n, c.re_l) : c.re_l;
   if (masked) find_near_pairs(x_, cutoff);
   const double viscous_factor = p.kinematic_viscosity * laplacian_factor(c.d, c.n0_l, c.lambda);
-  fill(density_now_, n, 0.0);
-  velocity_star_ = u_;
-  position_star_ = x_;
-  fill(wall_viscous_, n, kZero);
+  // Sized here, set in the loop (one pass over the particles instead of four).
+  density_now_.resize(n);
+  velocity_star_.resize(n);
+  position_star_.resize(n);
+  wall_viscous_.resize(n);
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
+    velocity_star_[i] = u_[i];
+    position_star_[i] = x_[i];
+    density_now_[i] = 0.0;
+    wall_viscous_[i] = kZero;
     if (is_inactive(kind_[i])) continue;
     double density_sum = 0.0;
     Eigen::Vector3d laplacian = Eigen::Vector3d::Zero();
