@@ -13,29 +13,10 @@
 namespace cosim::vegetation {
 namespace {
 
-// The single-blade scene's PET strip (seed 000 section 3(2)), z up, leaning downstream.
-PlantSpec strip(double density, double tilt_degrees, const Eigen::Vector3d& base) {
-  PlantSpec blade;
-  const double tilt = tilt_degrees * std::numbers::pi / 180;
-  blade.base = base;
-  blade.direction = Eigen::Vector3d(std::sin(tilt), 0, std::cos(tilt));
-  blade.length = 0.045;
-  blade.links = 16;
-  blade.width = 0.002;
-  blade.thickness = 1.2e-4;
-  blade.bending_stiffness = 8.67e-7;
-  blade.youngs_modulus = 3.0e9;
-  blade.density = density;
-  return blade;
-}
+using testing::pet_strip;
 
 BeamParameters water(double safety_factor, bool apart) {
-  BeamParameters parameters;
-  parameters.gravity = Eigen::Vector3d(0, 0, -9.81);
-  parameters.drag_coefficient = 1.95;
-  parameters.bending_damping_ratio = 0.5;
-  parameters.axial_damping_ratio = 0.5;
-  parameters.safety_factor = safety_factor;
+  BeamParameters parameters = testing::pet_strip_water(safety_factor);
   parameters.plants_apart_windows = apart;
   return parameters;
 }
@@ -97,7 +78,7 @@ void expect_same_bits(const FieldRun& a, const FieldRun& b) {
 TEST(PlantsApart, FreePlantsGoPlantByPlantWithTheSynchronousBits) {
   std::vector<PlantSpec> specs;
   for (int k = 0; k < 20; ++k)
-    specs.push_back(strip(1380, 10.0 * (k % 3), Eigen::Vector3d(0, 0.01 * k, 0)));
+    specs.push_back(pet_strip(1380, 10.0 * (k % 3), Eigen::Vector3d(0, 0.01 * k, 0)));
   const FieldRun synchronous = run(specs, water(10, false), 30, 2);
   const FieldRun one = run(specs, water(10, true), 30, 1), two = run(specs, water(10, true), 30, 2);
   EXPECT_EQ(synchronous.apart_windows, 0);
@@ -116,8 +97,8 @@ TEST(PlantsApart, FreePlantsGoPlantByPlantWithTheSynchronousBits) {
 TEST(PlantsApart, PlantsThatComeToTouchFallBackWithTheSynchronousBits) {
   std::vector<PlantSpec> specs;
   for (int k = 0; k < 10; ++k) {
-    specs.push_back(strip(1380, 0.0, Eigen::Vector3d(0, 0.03 * k, 0)));
-    PlantSpec stiff = strip(1380, 0.0, Eigen::Vector3d(0.007, 0.03 * k, 0));
+    specs.push_back(pet_strip(1380, 0.0, Eigen::Vector3d(0, 0.03 * k, 0)));
+    PlantSpec stiff = pet_strip(1380, 0.0, Eigen::Vector3d(0.007, 0.03 * k, 0));
     stiff.bending_stiffness *= 100;
     specs.push_back(stiff);
   }
@@ -138,7 +119,7 @@ TEST(PlantsApart, PlantsThatComeToTouchFallBackWithTheSynchronousBits) {
 // plant again.
 TEST(PlantsApart, AWindowNeedingTheRobustAttemptFallsBackWithTheSynchronousBits) {
   std::vector<PlantSpec> specs;
-  for (int k = 0; k < 20; ++k) specs.push_back(strip(10, 45, Eigen::Vector3d(0, 0.05 * k, 0)));
+  for (int k = 0; k < 20; ++k) specs.push_back(pet_strip(10, 45, Eigen::Vector3d(0, 0.05 * k, 0)));
   const FieldRun synchronous = run(specs, water(400, false), 40, 2, 0.05, 3);
   const FieldRun apart = run(specs, water(400, true), 40, 2, 0.05, 3);
   std::printf("%d of 40 windows plant by plant; %d robust restarts\n", apart.apart_windows,

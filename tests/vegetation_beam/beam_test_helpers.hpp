@@ -21,6 +21,35 @@ inline PlantSpec textbook_strip(int links) {
   return spec;
 }
 
+// The single-blade scene's PET strip (seed 000 section 3(2)), z up, leaning `tilt_degrees`
+// towards +x.
+inline PlantSpec pet_strip(double density, double tilt_degrees,
+                           const Eigen::Vector3d& base = Eigen::Vector3d::Zero()) {
+  PlantSpec blade;
+  const double tilt = tilt_degrees * std::numbers::pi / 180;
+  blade.base = base;
+  blade.direction = Eigen::Vector3d(std::sin(tilt), 0, std::cos(tilt));
+  blade.length = 0.045;
+  blade.links = 16;
+  blade.width = 0.002;
+  blade.thickness = 1.2e-4;
+  blade.bending_stiffness = 8.67e-7;
+  blade.youngs_modulus = 3.0e9;
+  blade.density = density;
+  return blade;
+}
+
+// Water with the single-blade scene's drag and damping (z up).
+inline BeamParameters pet_strip_water(double safety_factor) {
+  BeamParameters parameters;
+  parameters.gravity = Eigen::Vector3d(0, 0, -9.81);
+  parameters.drag_coefficient = 1.95;
+  parameters.bending_damping_ratio = 0.5;
+  parameters.axial_damping_ratio = 0.5;
+  parameters.safety_factor = safety_factor;
+  return parameters;
+}
+
 inline BeamParameters vacuum_parameters() {
   BeamParameters parameters;
   parameters.fluid_density = 0;

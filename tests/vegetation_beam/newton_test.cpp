@@ -12,27 +12,14 @@
 namespace cosim::vegetation {
 namespace {
 
-// The single-blade scene's PET strip (seed 000 section 3(2)), z up.
-PlantSpec strip(double density, double tilt_degrees) {
-  PlantSpec blade;
-  const double tilt = tilt_degrees * std::numbers::pi / 180;
-  blade.direction = Eigen::Vector3d(std::sin(tilt), 0, std::cos(tilt));
-  blade.length = 0.045;
-  blade.links = 16;
-  blade.width = 0.002;
-  blade.thickness = 1.2e-4;
-  blade.bending_stiffness = 8.67e-7;
-  blade.youngs_modulus = 3.0e9;
-  blade.density = density;
-  return blade;
-}
+using testing::pet_strip;
 
 // 20 PET strips 1 cm apart across the stream, upright or leaning 10 or 20 degrees: they never
 // touch.
 std::vector<PlantSpec> free_strips() {
   std::vector<PlantSpec> specs;
   for (int k = 0; k < 20; ++k) {
-    PlantSpec blade = strip(1380, 10.0 * (k % 3));
+    PlantSpec blade = pet_strip(1380, 10.0 * (k % 3));
     blade.base = Eigen::Vector3d(0, 0.01 * k, 0);
     specs.push_back(blade);
   }
@@ -40,13 +27,7 @@ std::vector<PlantSpec> free_strips() {
 }
 
 BeamParameters water(double safety_factor) {
-  BeamParameters parameters;
-  parameters.gravity = Eigen::Vector3d(0, 0, -9.81);
-  parameters.drag_coefficient = 1.95;
-  parameters.bending_damping_ratio = 0.5;
-  parameters.axial_damping_ratio = 0.5;
-  parameters.safety_factor = safety_factor;
-  return parameters;
+  return testing::pet_strip_water(safety_factor);
 }
 
 // A light blade (10 kg/m^3) leaning 45 degrees in still water: its net buoyancy, 99 % of the
@@ -55,11 +36,11 @@ BeamParameters water(double safety_factor) {
 // at safety_factor 300 and 1000 (modified Newton from the constant-acceleration predictor
 // contracted by only 0.56 per iteration at 500).
 TEST(NewtonAtLargeSubsteps, BuoyancyStepAtTimeZeroConvergesUpToSafetyFactor1000) {
-  PlantField statics({strip(10, 45)}, water(1));
+  PlantField statics({pet_strip(10, 45)}, water(1));
   statics.solve_static();
   const Eigen::Vector3d target = statics.tip_displacement(0);
   for (const double safety_factor : {100.0, 300.0, 1000.0}) {
-    PlantField field({strip(10, 45)}, water(safety_factor));
+    PlantField field({pet_strip(10, 45)}, water(safety_factor));
     const auto still = testing::uniform(field, Eigen::Vector3d::Zero());
     int restarts = 0, cutbacks = 0, substeps = 0;
     for (int window = 0; window < 60; ++window) {
@@ -86,7 +67,7 @@ TEST(NewtonAtLargeSubsteps, AnImpulsiveStartIsCarriedByHalvedSubsteps) {
   Eigen::Vector3d tips[2];
   int cutbacks = 0;
   for (int run = 0; run < 2; ++run) {
-    PlantField field({strip(1390, 0)}, water(run == 0 ? 10 : 300));
+    PlantField field({pet_strip(1390, 0)}, water(run == 0 ? 10 : 300));
     const auto flow = testing::uniform(field, Eigen::Vector3d(speed, 0, 0));
     for (int window = 0; window < 30; ++window)
       cutbacks += field.advance(0.01, flow, flow).cutbacks;
@@ -135,7 +116,7 @@ TEST(NewtonFailure, NamesThePlantAndNodeOfTheLargestResidualAndTheKeys) {
 TEST(NewtonSideBySide, SameBitsWithOneAndTwoThreads) {
   std::vector<PlantSpec> specs = free_strips();
   for (int k = 0; k < 2; ++k) {  // 1.5 mm apart: the 2 mm wide strips touch at once
-    PlantSpec blade = strip(1380, 0.0);
+    PlantSpec blade = pet_strip(1380, 0.0);
     blade.base = Eigen::Vector3d(0.0015 * k, 0.5, 0);
     specs.push_back(blade);
   }
