@@ -110,7 +110,8 @@ class FluidSystem {
   // Ensemble average of fluid particle velocities within `radius` of each point (seed 000: the
   // surrounding velocity of a plant particle, r_ev = 2 d_veg). water_fraction: fluid particles
   // within radius / particles of a full lattice within radius, clipped to [0, 1]. Points with no
-  // fluid get zero velocity and fraction 0.
+  // fluid get zero velocity and fraction 0. This, fluid_particles_near and set_point_forces share
+  // a kept grid: call them from one thread at a time.
   std::vector<Eigen::Vector3d> sample_velocity(const std::vector<Eigen::Vector3d>& points,
                                                double radius,
                                                std::vector<double>* water_fraction = nullptr) const;
@@ -291,7 +292,8 @@ class FluidSystem {
 
   // Coupling hooks (coupling.cpp): the cell grid of the fluid particles near the solids' points,
   // kept while no particle has moved or changed kind (state_generation_), so that the forces
-  // set before a step use the grid of the samples taken after the last one.
+  // set before a step use the grid of the samples taken after the last one. The const hooks
+  // share it, so they are called from one thread at a time (as the process does).
   struct PointGrid {
     std::uint64_t generation = 0;  // state_generation_ when built; 0: none
     double radius = 0;
