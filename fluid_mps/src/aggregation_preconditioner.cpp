@@ -278,9 +278,11 @@ void AggregationPreconditioner::build_coarse_matrix(const SparseRows& m) {
 void AggregationPreconditioner::apply(const std::vector<double>& r, std::vector<double>& z) {
   const int n = static_cast<int>(r.size());
   z.resize(n);
+  if (!factored_) {
 #pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) z[i] = inverse_diagonal_[i] * r[i];
-  if (!factored_) return;
+    for (int i = 0; i < n; ++i) z[i] = inverse_diagonal_[i] * r[i];
+    return;
+  }
   // P^T r by aggregate: each sum over the members in row order, as a loop over the rows adds.
   coarse_rhs_.resize(aggregate_count_);
 #pragma omp parallel for schedule(static) if (n >= 4096)
@@ -290,9 +292,11 @@ void AggregationPreconditioner::apply(const std::vector<double>& r, std::vector<
     coarse_rhs_[a] = sum;
   }
   coarse_solution_ = factor_.solve(coarse_rhs_);
+  // The Jacobi part and the coarse correction in one pass (the same sum, D^-1 r first).
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (aggregate_[i] >= 0) z[i] += coarse_solution_[aggregate_[i]];
+    const double jacobi = inverse_diagonal_[i] * r[i];
+    z[i] = aggregate_[i] >= 0 ? jacobi + coarse_solution_[aggregate_[i]] : jacobi;
   }
 }
 
