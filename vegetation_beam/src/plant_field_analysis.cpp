@@ -15,6 +15,7 @@
 #include "beam_elements.hpp"
 #include "cosim/vegetation_beam/banded_matrix.hpp"
 #include "cosim/vegetation_beam/plant_field.hpp"
+#include "newmark_constants.hpp"
 
 namespace cosim::vegetation {
 namespace {
@@ -212,12 +213,12 @@ void PlantField::refresh_contact_forces(int plant_index, double dt) {
   // Velocity from the current trial position by the Newmark relations (eq. 22-23).
   const auto velocity = [&](int k) -> Eigen::Vector3d {
     if (plants_[node_plant_[k]].first == k) return Eigen::Vector3d::Zero();  // clamped base
-    constexpr double beta = 0.25, gamma = 0.5;
     const Eigen::Vector3d acceleration =
-        (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) / (beta * dt * dt) -
-        (0.5 / beta - 1.0) * previous_accelerations_[k];
+        (positions_[k] - previous_positions_[k] - dt * previous_velocities_[k]) /
+            (kBeta * dt * dt) -
+        (0.5 / kBeta - 1.0) * previous_accelerations_[k];
     return previous_velocities_[k] +
-           dt * ((1 - gamma) * previous_accelerations_[k] + gamma * acceleration);
+           dt * ((1 - kGamma) * previous_accelerations_[k] + kGamma * acceleration);
   };
   for (int pair : plant_contact_pairs_[plant_index]) {
     const auto [a, b] = contact_candidates_[pair];
