@@ -134,7 +134,7 @@ std::pair<double, std::string> PlantField::step_limit() const {
                " N m^2, link length " + std::to_string(l0) + " m)";
     }
   }
-  if (parameters_.contact && plant_count() > 1) {
+  if (plants_may_touch()) {
     const double contact = std::sqrt(min_link_mass / contact_stiffness_);
     if (contact < best) {
       best = contact;
@@ -361,7 +361,7 @@ WindowReport PlantField::advance(double window_dt,
   // Plant by plant when no two can touch (plant_field_apart.cpp), but not right after a window
   // that needed the robust attempt (this one likely does too, and would be solved twice), and
   // not when the sub-steps' start positions it keeps would exceed kApartMostKeptPositions.
-  const bool contact = parameters_.contact && plant_count() > 1;
+  const bool contact = plants_may_touch();
   const long long kept_positions =
       contact ? static_cast<long long>(report.substeps - 1) * static_cast<long long>(n) : 0;
   if (parameters_.plants_apart_windows && !parameters_.rigid && !last_window_robust_ &&

@@ -77,15 +77,19 @@ void PlantField::update_contact_candidates() {
   update_contact_candidates(positions_);
 }
 
+double PlantField::largest_move(std::span<const Eigen::Vector3d> x,
+                                const std::vector<Eigen::Vector3d>& from) {
+  double moved = 0;
+  for (std::size_t k = 0; k < x.size(); ++k)
+    moved = std::max(moved, (x[k] - from[k]).squaredNorm());
+  return std::sqrt(moved);
+}
+
 void PlantField::update_contact_candidates(std::span<const Eigen::Vector3d> x) {
-  const std::size_t n = x.size();
   if (candidates_valid_) {
     // The list holds every pair within reach + margin; it stays complete while no node has
     // moved more than half the margin.
-    double moved = 0;
-    for (std::size_t k = 0; k < n; ++k)
-      moved = std::max(moved, (x[k] - candidate_positions_[k]).squaredNorm());
-    if (std::sqrt(moved) < 0.5 * contact_margin_) return;
+    if (largest_move(x, candidate_positions_) < 0.5 * contact_margin_) return;
   }
   candidate_positions_.assign(x.begin(), x.end());
   candidates_valid_ = true;
@@ -290,7 +294,7 @@ StaticReport PlantField::solve_static(double tolerance, int max_iterations) {
   const std::size_t n = positions_.size();
   std::fill(velocities_.begin(), velocities_.end(), Eigen::Vector3d::Zero());
   const std::vector<Eigen::Vector3d> still(n, Eigen::Vector3d::Zero());
-  const bool contact = parameters_.contact && plant_count() > 1;
+  const bool contact = plants_may_touch();
   BandedMatrix jacobian;
   std::vector<double> static_correction;  // scratch of apply_newton_correction
   std::vector<char> converged(plants_.size(), 0);

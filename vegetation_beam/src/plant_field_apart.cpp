@@ -35,14 +35,10 @@ struct PlantField::ApartWindow {
 };
 
 bool PlantField::plants_clear() {
-  if (!parameters_.contact || plant_count() < 2) return true;
-  const std::size_t n = positions_.size();
-  if (clearance_valid_) {
-    double moved = 0;
-    for (std::size_t k = 0; k < n; ++k)
-      moved = std::max(moved, (positions_[k] - clearance_positions_[k]).squaredNorm());
-    if (std::sqrt(moved) <= 0.25 * clearance_margin_) return plants_clear_;
-  }
+  if (!plants_may_touch()) return true;
+  if (clearance_valid_ &&
+      largest_move(positions_, clearance_positions_) <= 0.25 * clearance_margin_)
+    return plants_clear_;
   clearance_positions_ = positions_;
   clearance_valid_ = true;
   plants_clear_ = true;
@@ -64,7 +60,7 @@ bool PlantField::advance_plants_apart(const std::vector<Eigen::Vector3d>& ambien
        {&previous_positions_, &previous_velocities_, &previous_accelerations_, &previous_drag_})
     scratch->resize(n);
   ApartWindow window;
-  window.contact = parameters_.contact && count > 1;
+  window.contact = plants_may_touch();
   // No pair is within reach (plants_clear()): what the first sub-step's contact search finds.
   if (window.contact) clear_contact_state();
   std::vector<Eigen::Vector3d> ambient(n);

@@ -24,7 +24,7 @@ constexpr int kMaxCutbacks = 6;
 }  // namespace
 
 void PlantField::initialise_accelerations(const std::vector<Eigen::Vector3d>& ambient) {
-  const bool contact = parameters_.contact && plant_count() > 1 && !parameters_.rigid;
+  const bool contact = plants_may_touch() && !parameters_.rigid;
   if (contact) {
     update_contact_candidates();
     compute_contact_forces(positions_, velocities_, true);
@@ -223,7 +223,7 @@ PlantField::NewtonOutcome PlantField::newton_attempt(double dt,
   sweep.mass_weight = mass_weight;
   sweep.damping_weight = kGamma / (kBeta * dt);
   sweep.robust = robust;
-  sweep.contact = parameters_.contact && plant_count() > 1;
+  sweep.contact = plants_may_touch();
   sweep.ambient = &ambient;
   sweep.reuse = parameters_.reuse_jacobian && !robust;
   if (sweep.contact) update_contact_candidates();

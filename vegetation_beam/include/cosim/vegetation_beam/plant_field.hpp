@@ -364,6 +364,11 @@ class PlantField {
   // Plant and node with the largest residual among the plants not `converged`.
   void locate_largest_residual(const std::vector<char>& converged, NewtonOutcome& outcome) const;
   void check_state(const std::vector<Eigen::Vector3d>& ambient) const;
+  // Plant-to-plant contact is on and there are plants to touch.
+  bool plants_may_touch() const { return parameters_.contact && plant_count() > 1; }
+  // The largest distance a node of x lies from its place in `from` [m].
+  static double largest_move(std::span<const Eigen::Vector3d> x,
+                             const std::vector<Eigen::Vector3d>& from);
   // What check_state would throw for plant p, or empty.
   std::string state_problem(int plant, const std::vector<Eigen::Vector3d>& ambient) const;
   void newmark_kinematics_of(const Plant& plant, double dt, double mass_weight);
