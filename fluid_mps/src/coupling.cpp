@@ -75,18 +75,21 @@ const FluidSystem::PointGrid& FluidSystem::point_grid(const std::vector<Eigen::V
   PointGrid& near = point_grid_;
   if (points.empty()) return near;
   const MpsParameters& p = parameters_;
-  Eigen::AlignedBox3d reach(points.front());
-  for (const auto& x : points) reach.extend(x);
+  Eigen::AlignedBox3d span(points.front());
+  for (const auto& x : points) span.extend(x);
   const bool kept =
-      near.generation == state_generation_ && near.radius == radius && near.reach.contains(reach);
+      near.generation == state_generation_ && near.radius == radius && near.reach.contains(span);
   if (kept) return near;
-  reach.min().array() -= 2.0 * radius;
-  reach.max().array() += 2.0 * radius;
   near.generation = state_generation_;
   near.radius = radius;
-  near.reach = reach;
-  near.reach.min().array() += radius;  // points within it have their whole disc in `reach`
-  near.reach.max().array() -= radius;
+  // The points' box padded by the radius; the particles are collected in that box padded by the
+  // radius again, so points anywhere in near.reach have their whole disc in `reach`.
+  near.reach = span;
+  near.reach.min().array() -= radius;
+  near.reach.max().array() += radius;
+  Eigen::AlignedBox3d reach = near.reach;
+  reach.min().array() -= radius;
+  reach.max().array() += radius;
   near.inside.clear();
   near.at.clear();
   near.grid.reset();
