@@ -11,6 +11,7 @@
 #include "cosim/fluid_mps/neighbour_grid.hpp"
 #include "cosim/fluid_mps/parameters.hpp"
 #include "cosim/fluid_mps/pressure_solver.hpp"
+#include "cosim/fluid_mps/spatial_order.hpp"
 #include "cosim/fluid_mps/stage_seconds.hpp"
 
 namespace cosim::mps {
@@ -279,7 +280,8 @@ class FluidSystem {
       full_minimum_, dynamic_pressure_;
   BackgroundField background_;
   std::vector<char> trusted_, untrusted_;  // S > 0, S < 1: where each estimate is needed
-  std::vector<int> collided_, unknown_, unknown_particle_;
+  std::vector<int> collided_, unknown_, unknown_particle_;  // unknown_particle_: along space
+  SpatialOrderWork unknown_order_work_;
   std::vector<int> row_keys_;  // particle id of each pressure unknown (the aggregation's reuse)
   std::vector<std::int64_t> row_length_;
   struct alignas(64) AssemblyBuffer {  // one thread's rows of assemble_laplacian_rows
