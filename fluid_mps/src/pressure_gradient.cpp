@@ -18,24 +18,30 @@ using Form = MpsParameters::GradientForm;
 
 // p^_i: the smallest pressure of i and its pressure-carrying neighbours within the radius
 // (Koshizuka & Oka 1996): subtracting it keeps every pair force repulsive.
-void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum,
-                           const std::vector<char>* evaluate) {
+double smallest_around(const GradientInput& in, int i) {
   const NeighbourList& list = *in.neighbours;
   const auto& kinds = *in.kinds;
   const auto& p = *in.pressure;
+  double smallest = p[i];
+  for (std::int64_t k = in.begin(i); k < in.end(i); ++k) {
+    const int j = list.index[k];
+    if (carries_pressure(kinds[j]) && list.distance[k] < in.radius) {
+      smallest = std::min(smallest, p[j]);
+    }
+  }
+  return smallest;
+}
+
+// p^_i of every fluid particle (`evaluate`: of those marked), zero for the others.
+void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum,
+                           const std::vector<char>* evaluate) {
+  const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
   minimum.assign(n, 0.0);
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
-    double smallest = p[i];
-    for (std::int64_t k = in.begin(i); k < in.end(i); ++k) {
-      const int j = list.index[k];
-      if (carries_pressure(kinds[j]) && list.distance[k] < in.radius) {
-        smallest = std::min(smallest, p[j]);
-      }
-    }
-    minimum[i] = smallest;
+    minimum[i] = smallest_around(in, i);
   }
 }
 
@@ -341,17 +347,17 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
   if (form == Form::corrected_interior && in.unknown == nullptr) {
     throw std::invalid_argument("pressure_gradients: corrected_interior needs the unknowns");
   }
-  if (form == Form::symmetric || form == Form::symmetric_normal_wall) {
-    minimum.assign(n, 0.0);
-  } else {
-    neighbourhood_minimum(in, minimum, evaluate);
-  }
+  // p^_i of a particle is found in the loop, just before its gradient reads it, while its pairs
+  // are in cache (the symmetric forms have none: zero).
+  minimum.assign(n, 0.0);
+  const bool with_minimum = form != Form::symmetric && form != Form::symmetric_normal_wall;
   std::vector<Eigen::Vector3d> normals;
   if (form == Form::symmetric_normal_wall) wall_normals(in, normals);
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    if (is_fluid(kinds[i]) && (!evaluate || (*evaluate)[i]))
-      gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);
+    if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
+    if (with_minimum) minimum[i] = smallest_around(in, i);
+    gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);
   }
 }
 
