@@ -195,9 +195,19 @@ void FluidSystem::sample_surface(const std::vector<Eigen::Vector3d>& points, dou
   auto horizontal = [&](const Eigen::Vector3d& x) {
     return Eigen::Vector2d(periodic.fold(x.x()), planar ? 0.0 : x.y());
   };
+  // Both passes over the particles in parallel: minima and maxima are exact in any order.
+  const int n = particle_count();
+  const bool parallel = n >= 4096;
   Eigen::AlignedBox2d box;
-  for (int i = 0; i < particle_count(); ++i) {
-    if (kinds_[i] == ParticleKind::fluid) box.extend(horizontal(positions_[i]));
+#pragma omp parallel if (parallel)
+  {
+    Eigen::AlignedBox2d own;
+#pragma omp for schedule(static) nowait
+    for (int i = 0; i < n; ++i) {
+      if (kinds_[i] == ParticleKind::fluid) own.extend(horizontal(positions_[i]));
+    }
+#pragma omp critical
+    box.extend(own);
   }
   if (box.isEmpty() || points.empty()) return;
   if (periodic.enabled) {
@@ -210,14 +220,24 @@ void FluidSystem::sample_surface(const std::vector<Eigen::Vector3d>& points, dou
   const Eigen::Vector2d origin = box.min();
   const int nx = std::max(1, static_cast<int>(std::ceil((box.max().x() - origin.x()) / l0)));
   const int ny = planar ? 1 : static_cast<int>((box.max().y() - origin.y()) / l0) + 1;
-  std::vector<double> top(static_cast<std::size_t>(nx) * ny, kNoWater);
-  for (int i = 0; i < particle_count(); ++i) {
-    if (kinds_[i] != ParticleKind::fluid) continue;
-    const Eigen::Vector2d h = horizontal(positions_[i]);
-    const int cx = std::clamp(static_cast<int>((h.x() - origin.x()) / l0), 0, nx - 1);
-    const int cy = std::clamp(static_cast<int>((h.y() - origin.y()) / l0), 0, ny - 1);
-    double& t = top[static_cast<std::size_t>(cy) * nx + cx];
-    t = std::max(t, positions_[i][vertical]);
+  const std::size_t columns_count = static_cast<std::size_t>(nx) * ny;
+  std::vector<double> top(columns_count, kNoWater);
+#pragma omp parallel if (parallel)
+  {
+    std::vector<double> own(columns_count, kNoWater);
+#pragma omp for schedule(static) nowait
+    for (int i = 0; i < n; ++i) {
+      if (kinds_[i] != ParticleKind::fluid) continue;
+      const Eigen::Vector2d h = horizontal(positions_[i]);
+      const int cx = std::clamp(static_cast<int>((h.x() - origin.x()) / l0), 0, nx - 1);
+      const int cy = std::clamp(static_cast<int>((h.y() - origin.y()) / l0), 0, ny - 1);
+      double& t = own[static_cast<std::size_t>(cy) * nx + cx];
+      t = std::max(t, positions_[i][vertical]);
+    }
+#pragma omp critical
+    for (std::size_t column = 0; column < columns_count; ++column) {
+      top[column] = std::max(top[column], own[column]);
+    }
   }
   const int reach = static_cast<int>(std::ceil(radius / l0)) + 1;
   const int reach_y = planar ? 0 : reach;

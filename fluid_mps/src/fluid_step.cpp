@@ -226,11 +226,15 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
       visit_partners(neighbours_, position_star_, p.periodic, i, reach, pair);
     }
   }
-  for (int id = 0; id < n; ++id) {
-    const int i = rank_[id];
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) {
     if (collided_[i] == 0) continue;
     velocity_star_[i] += correction_[i];
     position_star_[i] += c.dt * correction_[i];
+  }
+  for (int id = 0; id < n; ++id) {  // particle order: the same sums in any internal order
+    const int i = rank_[id];
+    if (collided_[i] == 0) continue;
     report.collisions += collided_[i];
     report.collision_impulse += particle_mass_ * correction_[i];
     report.wall_collision_impulse += particle_mass_ * wall_correction_[i];

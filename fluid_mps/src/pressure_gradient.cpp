@@ -342,19 +342,21 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
                         std::vector<double>& minimum, const std::vector<char>* evaluate) {
   const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
-  gradient.assign(n, Eigen::Vector3d::Zero());
-  wall.assign(n, Eigen::Vector3d::Zero());
+  gradient.resize(n);  // every entry is set in the loop below
+  wall.resize(n);
   if (form == Form::corrected_interior && in.unknown == nullptr) {
     throw std::invalid_argument("pressure_gradients: corrected_interior needs the unknowns");
   }
   // p^_i of a particle is found in the loop, just before its gradient reads it, while its pairs
   // are in cache (the symmetric forms have none: zero).
-  minimum.assign(n, 0.0);
+  minimum.resize(n);
   const bool with_minimum = form != Form::symmetric && form != Form::symmetric_normal_wall;
   std::vector<Eigen::Vector3d> normals;
   if (form == Form::symmetric_normal_wall) wall_normals(in, normals);
 #pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
+    minimum[i] = 0.0;
+    gradient[i] = wall[i] = Eigen::Vector3d::Zero();
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
     if (with_minimum) minimum[i] = smallest_around(in, i);
     gradient_at(form, in, i, minimum, normals, gradient[i], wall[i]);

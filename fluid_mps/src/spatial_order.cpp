@@ -21,10 +21,23 @@ void order_along_cells(const std::vector<Eigen::Vector3d>& positions, double cel
                        int dimension, std::vector<int>& items, SpatialOrderWork& work) {
   const int m = static_cast<int>(items.size());
   if (m < 2) return;
+  // The box and the keys in parallel: minima and maxima are exact in any order, and each key
+  // is its item's own.
+  const bool parallel = m >= 4096;
   Eigen::Vector3d low = positions[items[0]], high = low;
-  for (const int i : items) {
-    low = low.cwiseMin(positions[i]);
-    high = high.cwiseMax(positions[i]);
+#pragma omp parallel if (parallel)
+  {
+    Eigen::Vector3d own_low = low, own_high = high;
+#pragma omp for schedule(static) nowait
+    for (int t = 0; t < m; ++t) {
+      own_low = own_low.cwiseMin(positions[items[t]]);
+      own_high = own_high.cwiseMax(positions[items[t]]);
+    }
+#pragma omp critical
+    {
+      low = low.cwiseMin(own_low);
+      high = high.cwiseMax(own_high);
+    }
   }
   // The axes in use, longest first (ties: x before y before z); the first is the slowest.
   std::array<int, 3> axes{0, 1, 2};
@@ -43,6 +56,7 @@ void order_along_cells(const std::vector<Eigen::Vector3d>& positions, double cel
                                                             : kMostCellsAnAxis;
   }
   work.key.resize(m);
+#pragma omp parallel for schedule(static) if (parallel)
   for (int t = 0; t < m; ++t) {
     const Eigen::Vector3d& x = positions[items[t]];
     std::uint64_t key = 0;

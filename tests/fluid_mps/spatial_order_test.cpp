@@ -2,6 +2,7 @@
 // axis slowest, one cell's items in the order given, a permutation of the items, and no overflow
 // for a particle thrown far out.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
@@ -91,6 +92,27 @@ TEST(SpatialOrder, AParticleFarOutDoesNotOverflowTheKeys) {
   for (int t = 1; t < 100; ++t) {
     EXPECT_EQ(items[t - 1 + (far_first ? 1 : 0)] + 1, items[t + (far_first ? 1 : 0)]);
   }
+}
+
+TEST(SpatialOrder, TheSameOrderOnOneAndTwoThreads) {
+  // From 4 096 items the box and the keys are found in parallel.
+  std::vector<Eigen::Vector3d> x;
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 20000; ++k) x.emplace_back(9.0 * u(random), 3.0 * u(random), u(random));
+  std::vector<int> given(x.size());
+  std::iota(given.begin(), given.end(), 0);
+  std::shuffle(given.begin(), given.end(), random);
+  std::vector<int> one = given, two = given;
+  SpatialOrderWork work;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  order_along_cells(x, 0.2, 3, one, work);
+  omp_set_num_threads(2);
+  order_along_cells(x, 0.2, 3, two, work);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one, two);
+  EXPECT_NE(one, given);
 }
 
 }  // namespace
