@@ -37,8 +37,10 @@ class AggregationPreconditioner {
   // Returns false (and apply() is then plain Jacobi) when the coarse matrix is not positive
   // definite, which happens only if `matrix` is not.
   bool setup(const SparseRows& matrix, double strength = kAggregationStrength);
-  // z = D^-1 r + P A_c^-1 P^T r.
-  void apply(const std::vector<double>& r, std::vector<double>& z);
+  // z = D^-1 r + P A_c^-1 P^T r; returns r . z summed over blocks of `block` rows, the blocks'
+  // sums (kept in `partial`) added in order, as the CG's dot products sum.
+  double apply(const std::vector<double>& r, std::vector<double>& z, int block,
+               std::vector<double>& partial);
   // Keys the aggregates of the last setup() by `row_keys` (a key per row, e.g. a particle id, in
   // [0, key_count)), so that reuse() can find them for another matrix of the same keys.
   void remember_keys(const std::vector<int>& row_keys, int key_count);

@@ -332,8 +332,9 @@ struct SolveProducts {
   }
 };
 
-// Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r,
-// or with `inverse_diagonal` the Jacobi step is fused into the residual update.
+// Preconditioned conjugate gradients from the guess in x; `precondition(r, z)` sets z = M^-1 r and
+// returns r . z (summed as dot() sums it), or with `inverse_diagonal` the Jacobi step is fused into
+// the residual update.
 template <class Precondition>
 PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double>& rhs,
                               std::vector<double>& x, double tolerance, int max_iterations,
@@ -357,10 +358,9 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
   const SolveProducts products(matrix, work, upper);
   double unused_rz = 0.0;
   const double rr0 = products.true_residual(rhs, x, q, r, z, nullptr, work.partial, unused_rz);
-  precondition(r, z);
+  double rz = precondition(r, z);
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) p[i] = z[i];
-  double rz = dot(r, z, work.partial);
   double residual = std::sqrt(rr0) / rhs_norm;
   // With float products the recursive residual r drifts from b - A x (each product is off by up
   // to 2^-24 an entry), and CG would converge on the rounded matrix, to about 1e-7 of |b| on
@@ -381,10 +381,7 @@ PcgResult conjugate_gradients(const SparseRows& matrix, const std::vector<double
       rr = products.true_residual(rhs, x, q, r, z, inverse_diagonal, work.partial, rz_next);
       last_true_norm = std::sqrt(rr);
     }
-    if (!inverse_diagonal) {
-      precondition(r, z);
-      rz_next = dot(r, z, work.partial);
-    }
+    if (!inverse_diagonal) rz_next = precondition(r, z);
     const double beta = rz_next / rz;
     rz = rz_next;
 #pragma omp parallel for schedule(static) if (n >= 4096)
@@ -500,7 +497,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
     PcgResult result =
         conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
                             [&](const std::vector<double>& r, std::vector<double>& z) {
-                              aggregation_->two_level.apply(r, z);
+                              return aggregation_->two_level.apply(r, z, kBlock, work_.partial);
                             });
     if (!reused) base_iterations_ = result.iterations;
     last_iterations_ = result.iterations;
@@ -512,9 +509,12 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
     const auto setup_start = StageClock::now();
     amg_->cycle.setup(hierarchy_matrix ? *hierarchy_matrix : matrix);
     const double setup_seconds = seconds_since(setup_start);
-    PcgResult result = conjugate_gradients(
-        matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
-        [&](const std::vector<double>& r, std::vector<double>& z) { amg_->cycle.apply(r, z); });
+    PcgResult result =
+        conjugate_gradients(matrix, rhs, x, tolerance, max_iterations, work_, upper(), nullptr,
+                            [&](const std::vector<double>& r, std::vector<double>& z) {
+                              amg_->cycle.apply(r, z);
+                              return dot(r, z, work_.partial);
+                            });
     result.setup_seconds = setup_seconds;
     return result;
   }
@@ -527,6 +527,7 @@ PcgResult PressureSolver::solve(const SparseRows& matrix, const std::vector<doub
                                z.resize(size);
 #pragma omp parallel for schedule(static) if (size >= 4096)
                                for (int i = 0; i < size; ++i) z[i] = inverse_diagonal[i] * r[i];
+                               return dot(r, z, work_.partial);
                              });
 }
 
