@@ -125,7 +125,8 @@ struct MpsParameters {
   // pays where the product is bound by reading the matrix: the 3D step at 38 k particles took
   // 0.82 of full_rows' time on one thread and 0.97 on two; a 2D step (14 k unknowns) 0.9 on one
   // thread but 1.10 on two (docs/performance.md). automatic: upper_triangle in 3D, full_rows in
-  // 2D (a choice from the scene alone, so runs and restarts stay bit-identical).
+  // 2D (a choice from the scene alone, so runs and restarts stay bit-identical). With full_rows
+  // the unknowns are numbered along space (spatial_order.hpp), with upper_triangle by particle id.
   enum class PressureProduct { automatic, full_rows, upper_triangle };
   PressureProduct pressure_product = PressureProduct::automatic;
   // amg: radius [l0] of the Laplacian model the multigrid hierarchy is built from (capped at the
