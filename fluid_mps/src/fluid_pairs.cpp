@@ -180,7 +180,7 @@ void FluidSystem::find_near_pairs(const std::vector<Eigen::Vector3d>& x, double 
   const bool masked = !p.partitions.empty();
   const double cutoff2 = near_cutoff2(cutoff);
   near_.radius = cutoff;
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) find_near_row(i, x, cutoff2, masked);
   // Thin partitions (seed 001 section 2.2(1)) cut pairs at x: infinite distance.
   mask_partition_crossings(near_, x, p.partitions, p.periodic, &kind_);

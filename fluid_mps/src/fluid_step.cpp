@@ -125,7 +125,7 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   velocity_star_.resize(n);
   position_star_.resize(n);
   wall_viscous_.resize(n);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     velocity_star_[i] = u_[i];
     position_star_[i] = x_[i];
@@ -203,7 +203,7 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
   fill(correction_, n, kZero);
   fill(wall_correction_, n, kZero);
   fill(collided_, n, 0);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kind_[i])) continue;
     auto pair = [&](int j, double r) {
@@ -260,7 +260,7 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   const bool mixed = p.source_term == MpsParameters::SourceTerm::mixed;
   fill(density_star_, n, 0.0);
   fill(divergence_, n, 0.0);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (fused) find_near_row(i, position_star_, cutoff2, false);
     double sum = 0.0, divergence_sum = 0.0;

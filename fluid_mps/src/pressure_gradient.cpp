@@ -38,7 +38,7 @@ void neighbourhood_minimum(const GradientInput& in, std::vector<double>& minimum
   const auto& kinds = *in.kinds;
   const int n = static_cast<int>(kinds.size());
   minimum.assign(n, 0.0);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
     minimum[i] = smallest_around(in, i);
@@ -55,7 +55,7 @@ void wall_normals(const GradientInput& in, std::vector<Eigen::Vector3d>& normal)
   const auto& x = *in.positions;
   const int n = static_cast<int>(kinds.size());
   normal.assign(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int w = 0; w < n; ++w) {
     if (kinds[w] != ParticleKind::wall) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -194,7 +194,7 @@ std::vector<Eigen::Vector3d> corrected_gradient(const GradientInput& in,
                                                 const std::vector<double>& reference) {
   const int n = static_cast<int>(in.kinds->size());
   std::vector<Eigen::Vector3d> result(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!carries_pressure((*in.kinds)[i])) continue;
     const PairSums s = pair_sums(in, i, [&](int j) { return field[j] - reference[i]; });
@@ -319,7 +319,7 @@ void carry_velocities(const GradientInput& in, const std::vector<Eigen::Vector3d
   const auto& x = *in.positions;
   const int n = static_cast<int>(kinds.size());
   std::vector<Eigen::Vector3d> change(n, Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || shift[i].squaredNorm() == 0.0) continue;
     Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
@@ -353,7 +353,7 @@ void pressure_gradients(MpsParameters::GradientForm form, const GradientInput& i
   const bool with_minimum = form != Form::symmetric && form != Form::symmetric_normal_wall;
   std::vector<Eigen::Vector3d> normals;
   if (form == Form::symmetric_normal_wall) wall_normals(in, normals);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     minimum[i] = 0.0;
     gradient[i] = wall[i] = Eigen::Vector3d::Zero();
@@ -377,7 +377,7 @@ void add_full_pressure_repulsion(Form form, const GradientInput& in,
   GradientInput full = in;
   full.pressure = &full_pressure;
   neighbourhood_minimum(full, full_minimum, evaluate);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || (evaluate && !(*evaluate)[i])) continue;
     const double extra =
@@ -398,7 +398,7 @@ void keep_layer_deviation(Form form, const GradientInput& in, const std::vector<
   const int n = static_cast<int>(kinds.size());
   taylor.resize(n);
   auto counted = [&](int i) { return is_fluid(kinds[i]) && evaluate[i]; };
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!counted(i)) continue;
     const PairSums s = pair_sums(in, i, [&](int j) { return background[j] - background[i]; });
@@ -424,7 +424,7 @@ void keep_layer_deviation(Form form, const GradientInput& in, const std::vector<
   for (std::size_t b = 0; b < mean.size(); ++b) {
     if (count[b] > 0) mean[b] /= count[b];
   }
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (counted(i)) gradient[i] += taylor[i] - mean[layer(i)];
   }
@@ -440,7 +440,7 @@ double shift_particles(const GradientInput& in, std::vector<Eigen::Vector3d>& ve
   auto on_surface = [&](int j) { return is_fluid(kinds[j]) && pressure_unknown[j] < 0; };
   std::vector<Eigen::Vector3d> shift(n, Eigen::Vector3d::Zero());
   const double factor = gradient_factor(in.dimension, in.n0);
-#pragma omp parallel for schedule(static, kParticleChunk) if (n >= 4096)
+#pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     if (!is_fluid(kinds[i]) || on_surface(i)) continue;
     Eigen::Vector3d concentration_gradient = Eigen::Vector3d::Zero();
