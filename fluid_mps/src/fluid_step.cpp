@@ -163,25 +163,14 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
     }
     position_star_[i] += dt * velocity_star_[i];
   }
-  // The report's sums in particle order (the same sums in any internal order), from copies by
-  // particle id made in parallel, so that the serial sums read in sequence. A term of exactly
-  // zero leaves a sum's bits as they are, so a non-fluid particle adds a zero acceleration.
-  report_by_id_[0].resize(n);
-  report_by_id_[1].resize(n);
-  int fluid_count = 0;
-#pragma omp parallel for schedule(static) reduction(+ : fluid_count) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    const bool fluid = is_fluid(kind_[i]);
-    report_by_id_[0][order_[i]] = wall_viscous_[i];
-    report_by_id_[1][order_[i]] = fluid ? acceleration_[i] : kZero;
-    fluid_count += fluid ? 1 : 0;
+  for (int id = 0; id < n; ++id) {  // particle order: the same sums in any internal order
+    const int i = rank_[id];
+    report.wall_viscous_force += wall_viscous_[i];
+    if (is_fluid(kind_[i])) {
+      report.external_impulse += acceleration_[i];
+      report.body_impulse += p.gravity + c.driving;
+    }
   }
-  for (int id = 0; id < n; ++id) {
-    report.wall_viscous_force += report_by_id_[0][id];
-    report.external_impulse += report_by_id_[1][id];
-  }
-  const Eigen::Vector3d body = p.gravity + c.driving;
-  for (int k = 0; k < fluid_count; ++k) report.body_impulse += body;  // as many additions
   report.external_impulse *= particle_mass_ * dt;
   report.body_impulse *= particle_mass_ * dt;
   report.wall_viscous_force *= particle_mass_ * viscous_factor;
@@ -237,24 +226,18 @@ void FluidSystem::collide(const StepConstants& c, StepReport& report) {
       visit_partners(neighbours_, position_star_, p.periodic, i, reach, pair);
     }
   }
-  // The corrections applied, and the report's terms copied by particle id (as in predict; a
-  // particle that did not collide adds exact zeros).
-  report_by_id_[0].resize(n);
-  report_by_id_[1].resize(n);
-  int collisions = 0;
-#pragma omp parallel for schedule(static) reduction(+ : collisions) if (n >= 4096)
+#pragma omp parallel for schedule(static) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
-    report_by_id_[0][order_[i]] = particle_mass_ * correction_[i];
-    report_by_id_[1][order_[i]] = particle_mass_ * wall_correction_[i];
     if (collided_[i] == 0) continue;
-    collisions += collided_[i];
     velocity_star_[i] += correction_[i];
     position_star_[i] += c.dt * correction_[i];
   }
-  report.collisions += collisions;
   for (int id = 0; id < n; ++id) {  // particle order: the same sums in any internal order
-    report.collision_impulse += report_by_id_[0][id];
-    report.wall_collision_impulse += report_by_id_[1][id];
+    const int i = rank_[id];
+    if (collided_[i] == 0) continue;
+    report.collisions += collided_[i];
+    report.collision_impulse += particle_mass_ * correction_[i];
+    report.wall_collision_impulse += particle_mass_ * wall_correction_[i];
   }
 }
 
@@ -294,24 +277,16 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
     density_star_[i] = sum;
     divergence_[i] = gradient_factor(c.d, c.n0_n) * divergence_sum;
   }
-  // Each particle's role, found in internal order and kept by particle id, so that the serial
-  // pass below reads its arrays in sequence.
-  enum : char { kNoRow, kSurface, kUnknown };
-  role_by_id_.resize(n);
-#pragma omp parallel for schedule(static) if (n >= 4096)
-  for (int i = 0; i < n; ++i) {
-    char role = kNoRow;
-    if (kind_[i] != ParticleKind::dummy && !is_inactive(kind_[i])) {
-      // Where solids take a share phi of the space, the fluid's full density is (1 - phi) n0.
-      role =
-          density_star_[i] < p.surface_threshold * c.n0_n * (1.0 - phi_[i]) ? kSurface : kUnknown;
-    }
-    role_by_id_[order_[i]] = role;
-  }
   unknown_particle_.clear();
   for (int id = 0; id < n; ++id) {  // in particle order, then along space
-    if (role_by_id_[id] == kSurface) ++report.surface_particles;
-    if (role_by_id_[id] == kUnknown) unknown_particle_.push_back(rank_[id]);
+    const int i = rank_[id];
+    if (kind_[i] == ParticleKind::dummy || is_inactive(kind_[i])) continue;
+    // Where solids take a share phi of the space, the fluid's full density is (1 - phi) n0.
+    if (density_star_[i] < p.surface_threshold * c.n0_n * (1.0 - phi_[i])) {
+      ++report.surface_particles;
+      continue;
+    }
+    unknown_particle_.push_back(i);
   }
   // Rows of neighbours near in number, so that the full rows' product gathers x and the
   // assembly reads the pair lists from cache; the cells are the Laplacian's reach, the matrix's

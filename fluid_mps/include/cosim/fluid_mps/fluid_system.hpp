@@ -282,9 +282,6 @@ class FluidSystem {
   std::vector<char> trusted_, untrusted_;  // S > 0, S < 1: where each estimate is needed
   std::vector<int> collided_, unknown_, unknown_particle_;  // unknown_particle_: along space
   SpatialOrderWork unknown_order_work_;
-  std::vector<char> role_by_id_;  // measure_density: no row, free surface or unknown, by id
-  // Per-particle terms of a stage's report by particle id, summed in sequence (predict, collide).
-  std::vector<Eigen::Vector3d> report_by_id_[2];
   std::vector<int> row_keys_;  // particle id of each pressure unknown (the aggregation's reuse)
   std::vector<std::int64_t> row_length_;
   struct alignas(64) AssemblyBuffer {  // one thread's rows of assemble_laplacian_rows
