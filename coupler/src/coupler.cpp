@@ -249,7 +249,9 @@ double Coupler::run_windows(ProcessGroup& processes, RunResult& result) {
       int64_t lowest = std::numeric_limits<int64_t>::max();
       for (const auto& [name, window] : progress.done) lowest = std::min(lowest, window);
       if (lowest > progress.completed) {
-        if (progress.completed < 0 && lowest >= 0) window_one_started = Clock::now();
+        // The windows' wall time runs from the end of this run's first window (window 0, or
+        // the first after a restart's checkpoint): the processes' start-up is not in it.
+        if (progress.completed == first - 1 && lowest >= first) window_one_started = Clock::now();
         progress.completed = lowest;
         if (progress.completed >= 1) result.windows_completed = progress.completed;
       }
