@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace cosim::mps {
@@ -288,32 +289,103 @@ void NeighbourGrid::gather_candidates(std::int64_t c, const std::vector<Eigen::V
   }
 }
 
-// Writes the candidates of `s` closer than sqrt(radius2) to xi (particle i itself left out) to
-// out, in candidate order; returns how many.
-std::size_t NeighbourGrid::candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2,
-                                               KeyedScratch& s, int* out) const {
+// Splits cell c at its centre into 2^D parts and keeps, for each part, the candidates closer
+// than sqrt(radius2) to the box of the part's own particles, in key order. A particle then
+// tests only its part's candidates and finds the same partners in the same order: the distance
+// to the box is never more than the distance to a particle inside it, in floating point too
+// (the subtraction, the squares and the sums round monotonically, and the terms are summed as
+// candidates_in_reach sums them). In 3D a part's reach holds about 40 % of the 3^3 cells'
+// candidates, in 2D about 60 % of the 3^2 cells'. Returns false, to test the whole block, when
+// the boundary is periodic (wrapped distances) or the cell holds too few particles to pay.
+bool NeighbourGrid::narrow_to_parts(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
+                                    double radius2, KeyedScratch& s) const {
+  const int parts = 1 << dimension_;
+  const std::int64_t first = cell_start_[c], last = cell_start_[c + 1];
+  if (periodic_.enabled || last - first < 2 * parts) return false;
+  const Eigen::Array3i cell(
+      static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
+      static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
+  const Eigen::Vector3d centre = origin_ + (cell.cast<double>() + 0.5).matrix() * cell_size_;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::array<Eigen::Vector3d, 8> low, high;
+  low.fill(Eigen::Vector3d::Constant(kInf));
+  high.fill(Eigen::Vector3d::Constant(-kInf));
+  s.part_of.resize(static_cast<std::size_t>(last - first));
+  for (std::int64_t k = first; k < last; ++k) {
+    const Eigen::Vector3d& x = positions[sorted_[k]];
+    if (!x.allFinite()) return false;  // no box then: the whole block, as without parts
+    int part = (x.x() >= centre.x() ? 1 : 0) | (x.y() >= centre.y() ? 2 : 0);
+    if (dimension_ == 3 && x.z() >= centre.z()) part |= 4;
+    s.part_of[k - first] = static_cast<unsigned char>(part);
+    low[part] = low[part].cwiseMin(x);
+    high[part] = high[part].cwiseMax(x);
+  }
   const std::size_t count = s.cj.size();
+  const std::size_t room = count * static_cast<std::size_t>(parts);
+  if (s.px.size() < room) {
+    s.px.resize(room);
+    s.py.resize(room);
+    s.pz.resize(room);
+    s.pj.resize(room);
+  }
+  const double *cx = s.cx.data(), *cy = s.cy.data(), *cz = s.cz.data();
+  double* d2 = s.distance2.data();
+  std::size_t kept = 0;
+  for (int part = 0; part < parts; ++part) {
+    s.part_begin[part] = kept;
+    if (!(low[part].x() <= high[part].x())) continue;  // no particle in this part
+    const double lx = low[part].x(), ly = low[part].y(), lz = low[part].z();
+    const double hx = high[part].x(), hy = high[part].y(), hz = high[part].z();
+    // Per axis at most one of the two gaps is positive (low <= high): their sum is that gap.
+    auto gap = [](double below, double above) {
+      return (below > 0.0 ? below : 0.0) + (above > 0.0 ? above : 0.0);
+    };
+#pragma omp simd
+    for (std::size_t k = 0; k < count; ++k) {
+      const double dx = gap(lx - cx[k], cx[k] - hx);
+      const double dy = gap(ly - cy[k], cy[k] - hy);
+      const double dz = gap(lz - cz[k], cz[k] - hz);
+      d2[k] = (dx * dx + dy * dy) + dz * dz;
+    }
+    for (std::size_t k = 0; k < count; ++k) {  // branch-free: every slot written, kept if near
+      s.px[kept] = cx[k];
+      s.py[kept] = cy[k];
+      s.pz[kept] = cz[k];
+      s.pj[kept] = s.cj[k];
+      kept += static_cast<std::size_t>(d2[k] < radius2);
+    }
+  }
+  s.part_begin[parts] = kept;
+  return true;
+}
+
+// Writes the candidates of `span` closer than sqrt(radius2) to xi (particle i itself left out)
+// to out, in candidate order; returns how many. `distance2` has room for span.count values.
+std::size_t NeighbourGrid::candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2,
+                                               const CandidateSpan& span, double* distance2,
+                                               int* out) const {
+  const std::size_t count = span.count;
   std::size_t found = 0;
   if (!periodic_.enabled) {
     // Branch-free: every candidate is written, the slot kept only if in reach. The sum of
     // squares in the order of Eigen's squaredNorm, so the pairs are those of neighbours().
     const double x0 = xi.x(), y0 = xi.y(), z0 = xi.z();
-    const double *cx = s.cx.data(), *cy = s.cy.data(), *cz = s.cz.data();
-    double* d2 = s.distance2.data();
+    const double *cx = span.x, *cy = span.y, *cz = span.z;
+    double* d2 = distance2;
 #pragma omp simd
     for (std::size_t k = 0; k < count; ++k) {
       const double dx = cx[k] - x0, dy = cy[k] - y0, dz = cz[k] - z0;
       d2[k] = (dx * dx + dy * dy) + dz * dz;
     }
     for (std::size_t k = 0; k < count; ++k) {
-      out[found] = s.cj[k];
-      found += static_cast<std::size_t>((d2[k] < radius2) & (s.cj[k] != i));
+      out[found] = span.j[k];
+      found += static_cast<std::size_t>((d2[k] < radius2) & (span.j[k] != i));
     }
     return found;
   }
   for (std::size_t k = 0; k < count; ++k) {
-    const Eigen::Vector3d d(s.cx[k] - xi.x(), s.cy[k] - xi.y(), s.cz[k] - xi.z());
-    if (s.cj[k] != i && periodic_.wrap(d).squaredNorm() < radius2) out[found++] = s.cj[k];
+    const Eigen::Vector3d d(span.x[k] - xi.x(), span.y[k] - xi.y(), span.z[k] - xi.z());
+    if (span.j[k] != i && periodic_.wrap(d).squaredNorm() < radius2) out[found++] = span.j[k];
   }
   return found;
 }
@@ -381,6 +453,9 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
       // A cell none of whose particles wants a row of its own is not searched at all.
       if ((*row_start)[c + 1] == (*row_start)[c]) continue;
       gather_candidates(c, positions, key, scratch);
+      const bool in_parts = narrow_to_parts(c, positions, radius2, scratch);
+      const CandidateSpan block{scratch.cx.data(), scratch.cy.data(), scratch.cz.data(),
+                                scratch.cj.data(), scratch.cj.size()};
       for (std::int64_t s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
         const int i = sorted_[s];
         if (!wants_row(i)) continue;  // an empty row: offset stays 0
@@ -388,11 +463,18 @@ void NeighbourGrid::neighbours_by_key(const std::vector<Eigen::Vector3d>& positi
         owner[i] = thread;
         if (count == 1 && i < last_row) rows_in_order = false;
         last_row = i;
-        if (used + scratch.cj.size() > index.size()) {
-          index.resize(std::max(2 * index.size(), used + scratch.cj.size()));
+        CandidateSpan span = block;
+        if (in_parts) {
+          const int part = scratch.part_of[s - cell_start_[c]];
+          const std::size_t b = scratch.part_begin[part];
+          span = {scratch.px.data() + b, scratch.py.data() + b, scratch.pz.data() + b,
+                  scratch.pj.data() + b, scratch.part_begin[part + 1] - b};
         }
-        const std::size_t found =
-            candidates_in_reach(i, positions[i], radius2, scratch, index.data() + used);
+        if (used + span.count > index.size()) {
+          index.resize(std::max(2 * index.size(), used + span.count));
+        }
+        const std::size_t found = candidates_in_reach(
+            i, positions[i], radius2, span, scratch.distance2.data(), index.data() + used);
         used += found;
         list.offset[i + 1] = static_cast<std::int64_t>(found);
       }

@@ -164,6 +164,63 @@ TEST(MpsNeighbourGrid, KeyedSearchWithRowMaskKeepsTheOtherRows) {
   }
 }
 
+// The keyed search on particles dense enough that each cell is split in parts (a cell of 16 or
+// more particles in 3D, 8 in 2D: a part's particles test only the candidates near their part's
+// box) against all pairs by brute force, in ascending key: a jittered lattice, some particles
+// exactly on the lines that split the cells, with the cells as large as the radius (as the
+// fluid searches) and larger.
+TEST(MpsNeighbourGrid, KeyedSearchInDenseCellsFindsEveryPairInKeyOrder) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  for (int dimension : {2, 3}) {
+    for (double cell_over_radius : {1.0, 1.4}) {
+      SCOPED_TRACE(testing::Message() << dimension << "D, cell " << cell_over_radius << " radius");
+      const double radius = 3.3;  // lattice spacing 1: about 36 particles a cell in 3D, 11 in 2D
+      const double cell = cell_over_radius * radius;
+      const int side = dimension == 3 ? 13 : 40;
+      std::vector<Eigen::Vector3d> points;
+      for (int a = 0; a < side; ++a)
+        for (int b = 0; b < side; ++b)
+          for (int c = 0; c < (dimension == 3 ? side : 1); ++c) {
+            Eigen::Vector3d x(a + jitter(rng), b + jitter(rng),
+                              dimension == 3 ? c + jitter(rng) : 0);
+            points.push_back(x);
+          }
+      // The box starts at -1, so the cells' centres lie at -1 + (k + 1/2) cell: put particles
+      // exactly there, on the planes between two parts.
+      for (int k = 0; k < 6; ++k) {
+        const double centre = -1.0 + (k + 0.5) * cell;
+        points[static_cast<std::size_t>(k) * 41 % points.size()].x() = centre;
+        points[static_cast<std::size_t>(k) * 53 % points.size()].y() = centre;
+        if (dimension == 3) points[static_cast<std::size_t>(k) * 67 % points.size()].z() = centre;
+      }
+      const int n = static_cast<int>(points.size());
+      std::vector<int> key(n);
+      for (int i = 0; i < n; ++i) key[i] = (i * 7919) % n;
+      const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-1.0),
+                                    Eigen::Vector3d::Constant(side + 1.0));
+      NeighbourGrid grid(dimension, box, cell);
+      grid.build(points);
+      NeighbourList list;
+      grid.neighbours_by_key(points, radius, key, list);
+      std::size_t pairs = 0;
+      for (int i = 0; i < n; ++i) {
+        std::vector<int> expected;
+        for (int j = 0; j < n; ++j) {
+          if (j != i && (points[j] - points[i]).squaredNorm() < radius * radius)
+            expected.push_back(j);
+        }
+        std::sort(expected.begin(), expected.end(), [&](int a, int b) { return key[a] < key[b]; });
+        const std::vector<int> found(list.index.begin() + list.begin(i),
+                                     list.index.begin() + list.end(i));
+        ASSERT_EQ(found, expected) << "particle " << i;
+        pairs += found.size();
+      }
+      EXPECT_GT(pairs, static_cast<std::size_t>(n) * (dimension == 3 ? 100 : 25));
+    }
+  }
+}
+
 // The keyed search keeps its work arrays between searches (NeighbourSearchWork): a search
 // that reuses them, into a list that held another search's pairs, gives the list of a fresh
 // search, with one and two threads. The searches: particles in cell order (one thread then

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -95,6 +96,12 @@ class NeighbourGrid {
   // Cells searched around `cell` (the 3^D block, extended in y across a seam with a drop).
   void search_block(const Eigen::Array3i& cell, std::vector<int>& xs, Eigen::Array3i& low,
                     Eigen::Array3i& high) const;
+  // Candidates in key order: positions by coordinate, and particle indices.
+  struct CandidateSpan {
+    const double *x, *y, *z;
+    const int* j;
+    std::size_t count;
+  };
   // Work arrays of neighbours_by_key, one set a thread.
   struct KeyedScratch {
     std::vector<std::uint64_t> candidate;  // key << 32 | particle, sorted
@@ -103,11 +110,18 @@ class NeighbourGrid {
     std::vector<int> cj;                   // and indices
     std::vector<double> distance2;
     std::vector<int> xs;
+    // The cell split in 2^D parts (narrow_to_parts): each part's candidates, part after part.
+    std::vector<double> px, py, pz;
+    std::vector<int> pj;
+    std::array<std::size_t, 9> part_begin{};
+    std::vector<unsigned char> part_of;  // the part of each particle of the cell
   };
   void gather_candidates(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
                          const std::vector<int>& key, KeyedScratch& s) const;
-  std::size_t candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2, KeyedScratch& s,
-                                  int* out) const;
+  bool narrow_to_parts(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
+                       double radius2, KeyedScratch& s) const;
+  std::size_t candidates_in_reach(int i, const Eigen::Vector3d& xi, double radius2,
+                                  const CandidateSpan& span, double* distance2, int* out) const;
   // x cells within `reach` of cell x, wrapped when periodic, each once, in ascending order.
   void x_range(int x, int reach, std::vector<int>& xs) const;
   // Extra y cells to search: across a seam with a drop, neighbours are stored up to `drop`
