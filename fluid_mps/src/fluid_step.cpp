@@ -119,6 +119,8 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   const bool mixed = p.source_term == MpsParameters::SourceTerm::mixed;
   const double cutoff = mixed ? std::max(c.re_n, c.re_l) : c.re_l;
   if (masked) find_near_pairs(x_, cutoff);
+  near_.radius = cutoff;  // the pairs at r^n here; measure_density finds them again at r*
+  const double cutoff2 = near_cutoff2(cutoff);
   const double viscous_factor = p.kinematic_viscosity * laplacian_factor(c.d, c.n0_l, c.lambda);
   // Sized here, set in the loop (one pass over the particles instead of four).
   density_now_.resize(n);
@@ -148,12 +150,11 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
       laplacian += term;
       if (!is_fluid(kind_[j])) wall_laplacian += term;
     };
-    if (masked) {
-      for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
-        pair(near_.index[k], near_.distance[k]);
-      }
-    } else {
-      visit_partners(neighbours_, x_, p.periodic, i, cutoff, pair);
+    // Without partitions the row is found here, while it is in cache: its distances in one
+    // branch-free pass, then the sums over the pairs in reach, in list order.
+    if (!masked) find_near_row(i, x_, cutoff2, false);
+    for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
+      pair(near_.index[k], near_.distance[k]);
     }
     density_now_[i] = density_sum;
     wall_viscous_[i] = wall_laplacian;
