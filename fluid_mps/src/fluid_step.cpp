@@ -144,7 +144,7 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
     Eigen::Vector3d wall_laplacian = Eigen::Vector3d::Zero();  // the walls' share of it
     const Eigen::Vector3d ui = u_[i];
     auto pair = [&](int j, double r) {
-      if (mixed && r < c.re_n) density_sum += weight(r, c.re_n);
+      if (mixed) density_sum += weight(r, c.re_n);  // zero from re_n on: no branch on r
       if (!fluid || r >= c.re_l) return;
       const Eigen::Vector3d term = (u_[j] - ui) * weight(r, c.re_l);
       laplacian += term;
@@ -265,15 +265,21 @@ void FluidSystem::measure_density(const StepConstants& c, StepReport& report) {
   for (int i = 0; i < n; ++i) {
     if (fused) find_near_row(i, position_star_, cutoff2, false);
     double sum = 0.0, divergence_sum = 0.0;
-    for (std::int64_t k = list.offset[i]; k < near_end_[i]; ++k) {
-      const double r = list.distance[k];
-      if (r >= c.re_n) continue;
-      sum += weight(r, c.re_n);
-      if (!mixed) continue;  // the divergence only enters the mixed source term
-      const int j = list.index[k];
-      divergence_sum +=
-          divergence_pair_term(velocity_star_[j] - velocity_star_[i],
-                               p.periodic.wrap(position_star_[j] - position_star_[i]), r, c.re_n);
+    const std::int64_t begin = list.offset[i], end = near_end_[i];
+    if (!mixed) {
+      // weight() is zero from re_n on: every pair summed, no branch on r (the same sum).
+      for (std::int64_t k = begin; k < end; ++k) sum += weight(list.distance[k], c.re_n);
+    } else {
+      for (std::int64_t k = begin; k < end; ++k) {
+        const double r = list.distance[k];
+        if (r >= c.re_n) continue;
+        sum += weight(r, c.re_n);
+        // The divergence only enters the mixed source term.
+        const int j = list.index[k];
+        divergence_sum +=
+            divergence_pair_term(velocity_star_[j] - velocity_star_[i],
+                                 p.periodic.wrap(position_star_[j] - position_star_[i]), r, c.re_n);
+      }
     }
     density_star_[i] = sum;
     divergence_[i] = gradient_factor(c.d, c.n0_n) * divergence_sum;
