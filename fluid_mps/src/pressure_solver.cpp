@@ -10,6 +10,7 @@
 #include "aggregation_preconditioner.hpp"
 #include "amg_preconditioner.hpp"
 #include "cosim/fluid_mps/stage_seconds.hpp"
+#include "row_product.hpp"
 #include "upper_triangle.hpp"
 
 namespace cosim::mps {
@@ -38,113 +39,6 @@ double dot(const std::vector<double>& a, const std::vector<double>& b,
   double total = 0.0;
   for (double p : partial) total += p;
   return total;
-}
-
-// Rows [begin, end) of y = A x. Each row is summed on its own accumulator in the order of its
-// entries, as the plain loop `for k: sum += value[k] * x[column[k]]` does, so y has the same bits;
-// but kRowGroup rows are summed side by side. A single row's sum is a chain of dependent
-// additions (about 4 cycles each, 122 of them a row in 3D); interleaving independent rows lets
-// the additions of the group overlap. Past the shortest row of the group a row that has ended
-// keeps its sum (a select: no term is added that the plain loop would not add).
-constexpr int kRowGroup = 4;
-
-template <class Column, class Value>
-void multiply_rows(const std::int64_t* offset, const Column* column, const Value* value,
-                   const double* x, int begin, int end, int rows, double* y) {
-  const std::int64_t entries = offset[rows];
-  int i = begin;
-  for (; i + kRowGroup <= end; i += kRowGroup) {
-    std::int64_t first[kRowGroup], length[kRowGroup];
-    double sum[kRowGroup];
-    std::int64_t shortest = offset[i + 1] - offset[i], longest = 0;
-    for (int g = 0; g < kRowGroup; ++g) {
-      first[g] = offset[i + g];
-      length[g] = offset[i + g + 1] - first[g];
-      shortest = std::min(shortest, length[g]);
-      longest = std::max(longest, length[g]);
-      sum[g] = 0.0;
-    }
-    for (std::int64_t t = 0; t < shortest; ++t) {
-      for (int g = 0; g < kRowGroup; ++g) {
-        sum[g] += static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
-      }
-    }
-    if (first[kRowGroup - 1] + longest <= entries) {
-      // The slots past a row's end are those of the next rows: valid to read, never summed.
-      for (std::int64_t t = shortest; t < longest; ++t) {
-        for (int g = 0; g < kRowGroup; ++g) {
-          const double added =
-              sum[g] + static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
-          sum[g] = t < length[g] ? added : sum[g];
-        }
-      }
-    } else {
-      for (int g = 0; g < kRowGroup; ++g) {
-        for (std::int64_t k = first[g] + shortest; k < first[g] + length[g]; ++k) {
-          sum[g] += static_cast<double>(value[k]) * x[column[k]];
-        }
-      }
-    }
-    for (int g = 0; g < kRowGroup; ++g) y[i + g] = sum[g];
-  }
-  for (; i < end; ++i) {
-    double sum = 0.0;
-    for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) {
-      sum += static_cast<double>(value[k]) * x[column[k]];
-    }
-    y[i] = sum;
-  }
-}
-
-// The matrix as the products read it: below 65 536 unknowns with 16-bit column indices (10
-// instead of 12 bytes an entry; the product is bound by reading the matrix), made once a solve;
-// with `single_value`, values rounded to float (6 bytes an entry with short indices).
-struct RowView {
-  const SparseRows* m = nullptr;
-  const std::uint16_t* short_column = nullptr;  // null: m->column
-  const float* single_value = nullptr;          // null: m->value
-};
-
-template <class Value>
-void multiply_rows(const RowView& view, const Value* value, const double* x, int begin, int end,
-                   double* y) {
-  const SparseRows& m = *view.m;
-  if (view.short_column) {
-    multiply_rows(m.offset.data(), view.short_column, value, x, begin, end, m.rows(), y);
-  } else {
-    multiply_rows(m.offset.data(), m.column.data(), value, x, begin, end, m.rows(), y);
-  }
-}
-
-void multiply_rows(const RowView& view, const double* x, int begin, int end, double* y) {
-  if (view.single_value) {
-    multiply_rows(view, view.single_value, x, begin, end, y);
-  } else {
-    multiply_rows(view, view.m->value.data(), x, begin, end, y);
-  }
-}
-
-RowView row_view(const SparseRows& m, std::vector<std::uint16_t>& short_column,
-                 std::vector<float>* single_value = nullptr) {
-  RowView view;
-  view.m = &m;
-  const std::int64_t entries = static_cast<std::int64_t>(m.column.size());
-  if (single_value) {
-    single_value->resize(m.value.size());
-#pragma omp parallel for schedule(static) if (entries >= 65536)
-    for (std::int64_t k = 0; k < entries; ++k) {
-      (*single_value)[k] = static_cast<float>(m.value[k]);
-    }
-    view.single_value = single_value->data();
-  }
-  if (m.rows() > 65536) return view;
-  short_column.resize(m.column.size());
-#pragma omp parallel for schedule(static) if (entries >= 65536)
-  for (std::int64_t k = 0; k < entries; ++k) {
-    short_column[k] = static_cast<std::uint16_t>(m.column[k]);
-  }
-  view.short_column = short_column.data();
-  return view;
 }
 
 PcgResult solve_incomplete_cholesky(const SparseRows& matrix, const std::vector<double>& rhs,
@@ -305,9 +199,8 @@ struct SolveProducts {
       upper->build(matrix, single);  // with floats for the iterations, doubles for the rest
       return;
     }
-    rows = row_view(matrix, work.short_column, single ? &work.single_value : nullptr);
-    exact = rows;
-    exact.single_value = nullptr;
+    rows = row_view(matrix, work, single);
+    exact = exact_view(rows);
   }
 
   // q = A p with the products of the iterations; returns p . q.
@@ -553,9 +446,8 @@ void multiply(const SparseRows& matrix, const std::vector<double>& x, std::vecto
               bool single_precision) {
   const int n = matrix.rows();
   y.resize(n);
-  std::vector<std::uint16_t> short_column;
-  std::vector<float> single_value;
-  const RowView view = row_view(matrix, short_column, single_precision ? &single_value : nullptr);
+  CgWork work;
+  const RowView view = row_view(matrix, work, single_precision);
   const int blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel for schedule(static) if (blocks >= 4)
   for (int block = 0; block < blocks; ++block) {

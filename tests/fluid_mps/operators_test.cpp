@@ -390,10 +390,11 @@ int product_differing_from_plain_loop(int n, bool single = false) {
 
 }  // namespace
 
-// The interleaved row product keeps each row's summation order: its bits are those of the plain
-// loop, for rows of every length (empty rows, rows ending inside a group, a row of -0 products,
-// the last rows of the matrix) and whatever the thread count; with 16-bit column indices (up to
-// 65 536 rows) and 32-bit ones.
+// The row products (double values: the rows interleaved by groups, padded with zeros; float
+// values: the rows' own layout) keep each row's summation order: their bits are those of the
+// plain loop, for rows of every length (empty rows, rows ending inside a group, a row of -0
+// products, the last rows of the matrix) and whatever the thread count; with 16-bit column
+// indices (up to 65 536 rows) and 32-bit ones.
 TEST(MpsPressureSolver, MatrixProductHasTheBitsOfThePlainRowLoop) {
   for (const int n : {5000, 70000}) {
     SCOPED_TRACE(n);

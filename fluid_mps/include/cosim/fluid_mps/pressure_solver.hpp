@@ -100,11 +100,16 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
                     Preconditioner preconditioner = Preconditioner::jacobi);
 
 // Work vectors of the conjugate gradients (residual, preconditioned residual, direction,
-// product, per-block partial sums; the matrix's column indices in 16 bits when they fit).
+// product, per-block partial sums) and the matrix as the products read it (row_product.hpp in
+// fluid_mps/src: the rows interleaved by groups, or with float values in their own layout;
+// column indices in 16 bits when they fit).
 struct CgWork {
   std::vector<double> r, z, p, q, partial;
-  std::vector<std::uint16_t> short_column;
   bool single_precision = false;  // the CG products read float copies of the values
+  std::vector<std::int64_t> group_start;
+  std::vector<double> group_value;
+  std::vector<std::uint16_t> group_short_column, short_column;
+  std::vector<int> group_column;
   std::vector<float> single_value;
 };
 

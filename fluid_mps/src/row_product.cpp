@@ -1,0 +1,204 @@
+#include "row_product.hpp"
+
+#include <algorithm>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+namespace cosim::mps {
+namespace {
+
+// The rows' own layout. Past the shortest row of a group a row that has ended keeps its sum (a
+// select: no term is added that the plain loop would not add).
+template <class Column, class Value>
+void multiply_own_rows(const std::int64_t* offset, const Column* column, const Value* value,
+                       const double* x, int begin, int end, int rows, double* y) {
+  const std::int64_t entries = offset[rows];
+  int i = begin;
+  for (; i + kRowGroup <= end; i += kRowGroup) {
+    std::int64_t first[kRowGroup], length[kRowGroup];
+    double sum[kRowGroup];
+    std::int64_t shortest = offset[i + 1] - offset[i], longest = 0;
+    for (int g = 0; g < kRowGroup; ++g) {
+      first[g] = offset[i + g];
+      length[g] = offset[i + g + 1] - first[g];
+      shortest = std::min(shortest, length[g]);
+      longest = std::max(longest, length[g]);
+      sum[g] = 0.0;
+    }
+    for (std::int64_t t = 0; t < shortest; ++t) {
+      for (int g = 0; g < kRowGroup; ++g) {
+        sum[g] += static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
+      }
+    }
+    if (first[kRowGroup - 1] + longest <= entries) {
+      // The slots past a row's end are those of the next rows: valid to read, never summed.
+      for (std::int64_t t = shortest; t < longest; ++t) {
+        for (int g = 0; g < kRowGroup; ++g) {
+          const double added =
+              sum[g] + static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
+          sum[g] = t < length[g] ? added : sum[g];
+        }
+      }
+    } else {
+      for (int g = 0; g < kRowGroup; ++g) {
+        for (std::int64_t k = first[g] + shortest; k < first[g] + length[g]; ++k) {
+          sum[g] += static_cast<double>(value[k]) * x[column[k]];
+        }
+      }
+    }
+    for (int g = 0; g < kRowGroup; ++g) y[i + g] = sum[g];
+  }
+  for (; i < end; ++i) {
+    double sum = 0.0;
+    for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) {
+      sum += static_cast<double>(value[k]) * x[column[k]];
+    }
+    y[i] = sum;
+  }
+}
+
+// The interleaved groups. A padding slot holds a zero value (and the group's first row as its
+// column): it adds +0 or -0 to its row's sum, which leaves the sum as it is (the sum starts at
+// +0, so it is never -0). With SSE2 two rows' slots are multiplied and added in one instruction
+// each, lane by lane as the scalar operations round: the same bits.
+template <class Column>
+void multiply_groups(const std::int64_t* group_start, const double* group_value,
+                     const Column* group_column, const double* x, int begin, int end, double* y) {
+  static_assert(kRowGroup % 2 == 0);
+  for (int g = begin / kRowGroup; g * kRowGroup < end; ++g) {
+    const std::int64_t start = group_start[g];
+    const std::int64_t width = (group_start[g + 1] - start) / kRowGroup;
+    const double* value = group_value + start;
+    const Column* column = group_column + start;
+    double sum[kRowGroup];
+#ifdef __SSE2__
+    __m128d pair_sum[kRowGroup / 2];
+    for (int h = 0; h < kRowGroup / 2; ++h) pair_sum[h] = _mm_setzero_pd();
+    for (std::int64_t t = 0; t < width; ++t) {
+      const double* v = value + kRowGroup * t;
+      const Column* c = column + kRowGroup * t;
+      for (int h = 0; h < kRowGroup / 2; ++h) {
+        const __m128d xs = _mm_loadh_pd(_mm_load_sd(x + c[2 * h]), x + c[2 * h + 1]);
+        pair_sum[h] = _mm_add_pd(pair_sum[h], _mm_mul_pd(_mm_loadu_pd(v + 2 * h), xs));
+      }
+    }
+    for (int h = 0; h < kRowGroup / 2; ++h) _mm_storeu_pd(sum + 2 * h, pair_sum[h]);
+#else
+    for (int r = 0; r < kRowGroup; ++r) sum[r] = 0.0;
+    for (std::int64_t t = 0; t < width; ++t) {
+      for (int r = 0; r < kRowGroup; ++r) {
+        sum[r] += value[kRowGroup * t + r] * x[column[kRowGroup * t + r]];
+      }
+    }
+#endif
+    const int first = g * kRowGroup;
+    for (int r = 0; r < kRowGroup && first + r < end; ++r) y[first + r] = sum[r];
+  }
+}
+
+template <class Column>
+void interleave(const SparseRows& m, const std::vector<std::int64_t>& start,
+                std::vector<double>& group_value, std::vector<Column>& group_column) {
+  const int n = m.rows();
+  const int groups = static_cast<int>(start.size()) - 1;
+  group_value.resize(start[groups]);
+  group_column.resize(start[groups]);
+#pragma omp parallel for schedule(static) if (groups >= 1024)
+  for (int g = 0; g < groups; ++g) {
+    const std::int64_t width = (start[g + 1] - start[g]) / kRowGroup;
+    double* value = group_value.data() + start[g];
+    Column* column = group_column.data() + start[g];
+    for (int r = 0; r < kRowGroup; ++r) {
+      const int i = g * kRowGroup + r;
+      const std::int64_t first = i < n ? m.offset[i] : 0;
+      const std::int64_t length = i < n ? m.offset[i + 1] - first : 0;
+      for (std::int64_t t = 0; t < width; ++t) {
+        const bool entry = t < length;
+        value[kRowGroup * t + r] = entry ? m.value[first + t] : 0.0;
+        column[kRowGroup * t + r] =
+            static_cast<Column>(entry ? m.column[first + t] : g * kRowGroup);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+RowView row_view(const SparseRows& m, CgWork& work, bool single) {
+  RowView view;
+  view.m = &m;
+  const int n = m.rows();
+  const bool short_columns = n <= 65536;
+  const std::int64_t entries = static_cast<std::int64_t>(m.column.size());
+  if (!single) {
+    const int groups = (n + kRowGroup - 1) / kRowGroup;
+    std::vector<std::int64_t>& start = work.group_start;
+    start.resize(static_cast<std::size_t>(groups) + 1);
+    start[0] = 0;
+    for (int g = 0; g < groups; ++g) {
+      std::int64_t width = 0;
+      for (int i = g * kRowGroup; i < std::min(n, (g + 1) * kRowGroup); ++i) {
+        width = std::max(width, m.offset[i + 1] - m.offset[i]);
+      }
+      start[g + 1] = start[g] + kRowGroup * width;
+    }
+    view.group_start = start.data();
+    if (short_columns) {
+      interleave(m, start, work.group_value, work.group_short_column);
+      view.group_short_column = work.group_short_column.data();
+    } else {
+      interleave(m, start, work.group_value, work.group_column);
+      view.group_column = work.group_column.data();
+    }
+    view.group_value = work.group_value.data();
+    return view;
+  }
+  work.single_value.resize(m.value.size());
+#pragma omp parallel for schedule(static) if (entries >= 65536)
+  for (std::int64_t k = 0; k < entries; ++k) {
+    work.single_value[k] = static_cast<float>(m.value[k]);
+  }
+  view.single_value = work.single_value.data();
+  if (!short_columns) return view;
+  work.short_column.resize(m.column.size());
+#pragma omp parallel for schedule(static) if (entries >= 65536)
+  for (std::int64_t k = 0; k < entries; ++k) {
+    work.short_column[k] = static_cast<std::uint16_t>(m.column[k]);
+  }
+  view.short_column = work.short_column.data();
+  return view;
+}
+
+RowView exact_view(const RowView& view) {
+  RowView exact = view;
+  exact.single_value = nullptr;
+  return exact;
+}
+
+void multiply_rows(const RowView& view, const double* x, int begin, int end, double* y) {
+  if (view.group_start) {
+    if (view.group_short_column) {
+      multiply_groups(view.group_start, view.group_value, view.group_short_column, x, begin, end,
+                      y);
+    } else {
+      multiply_groups(view.group_start, view.group_value, view.group_column, x, begin, end, y);
+    }
+    return;
+  }
+  const SparseRows& m = *view.m;
+  const auto own_rows = [&](const auto* value) {
+    if (view.short_column) {
+      multiply_own_rows(m.offset.data(), view.short_column, value, x, begin, end, m.rows(), y);
+    } else {
+      multiply_own_rows(m.offset.data(), m.column.data(), value, x, begin, end, m.rows(), y);
+    }
+  };
+  if (view.single_value) {
+    own_rows(view.single_value);
+  } else {
+    own_rows(m.value.data());
+  }
+}
+
+}  // namespace cosim::mps

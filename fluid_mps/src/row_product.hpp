@@ -1,0 +1,46 @@
+// The CG's products over the full rows of the pressure matrix (pressure_solver.cpp): the matrix
+// laid out as the products read it, made once a solve, and y = A x over a range of rows. Every
+// layout sums each row in the order of its entries, as the plain loop
+// `for k: sum += value[k] * x[column[k]]` does, so y has the bits of that loop.
+#pragma once
+
+#include <cstdint>
+
+#include "cosim/fluid_mps/pressure_solver.hpp"
+
+namespace cosim::mps {
+
+// Rows summed side by side. A single row's sum is a chain of dependent additions (about 4
+// cycles each, about 50 a row in 2D at 4 l0); interleaving independent rows lets the additions
+// of a group overlap. Shares of a product start at multiples of it.
+constexpr int kRowGroup = 4;
+
+// How a product reads the matrix:
+// - double values (row_view without `single`): the rows interleaved by groups of kRowGroup,
+//   slot t of row kRowGroup g + r at group_start[g] + kRowGroup t + r, each group as wide as its
+//   longest row (the shorter rows padded with zeros), so one load reads the values of two rows
+//   (SSE2);
+// - float values (`single`, set_single_precision_product): the rows in their own layout, the
+//   values rounded to float.
+// Column indices in 16 bits up to 65 536 rows (the product is bound by reading the matrix).
+struct RowView {
+  const SparseRows* m = nullptr;
+  const std::uint16_t* short_column = nullptr;  // the rows' own layout; null: m->column
+  const float* single_value = nullptr;          // null: m->value
+  const std::int64_t* group_start = nullptr;    // non-null: the interleaved groups
+  const double* group_value = nullptr;
+  const std::uint16_t* group_short_column = nullptr;  // null: group_column
+  const int* group_column = nullptr;
+};
+
+// The view of `m` the CG iterations read, its storage in `work`.
+RowView row_view(const SparseRows& m, CgWork& work, bool single);
+
+// The same matrix with its double values (the true residuals): `view` itself unless it reads
+// float values.
+RowView exact_view(const RowView& view);
+
+// Rows [begin, end) of y = A x; `begin` a multiple of kRowGroup.
+void multiply_rows(const RowView& view, const double* x, int begin, int end, double* y);
+
+}  // namespace cosim::mps
