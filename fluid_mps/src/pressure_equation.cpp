@@ -20,7 +20,7 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
   const MpsParameters& p = parameters_;
   const int m = static_cast<int>(unknown_particle_.size());
   const double scale = c.lambda * c.n0_l * p.density / (2.0 * c.d * c.dt * c.dt);
-  assemble_laplacian_rows(c.re_l, scale * p.compressibility, matrix_);
+  assemble_laplacian_rows(c.re_l, scale * p.compressibility, matrix_, assembly_buffers_);
   rhs_.resize(m);
   solution_.resize(m);
 #pragma omp parallel for schedule(static) if (m >= 4096)
@@ -44,7 +44,7 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
                                    p.particle_spacing * hierarchy_sums_.n0 * p.density /
                                    (2.0 * c.d * c.dt * c.dt);
     assemble_laplacian_rows(hierarchy_radius(), hierarchy_scale * p.compressibility,
-                            hierarchy_matrix_);
+                            hierarchy_matrix_, hierarchy_buffers_);
   }
 }
 
@@ -53,20 +53,20 @@ void FluidSystem::assemble_pressure_equation(const StepConstants& c) {
 // out. One pass over the pairs: each thread writes its contiguous share of the rows into its own
 // buffer, and the buffers are copied into place once the row offsets are summed (on one thread
 // the buffer becomes the matrix).
-void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift,
-                                          SparseRows& matrix) {
+void FluidSystem::assemble_laplacian_rows(double radius, double diagonal_shift, SparseRows& matrix,
+                                          std::vector<AssemblyBuffer>& buffers) {
   const NeighbourList& list = near_;
   const int m = static_cast<int>(unknown_particle_.size());
   fill(row_length_, static_cast<std::size_t>(m) + 1, std::int64_t{0});
   const int threads = m >= 4096 ? std::max(1, omp_get_max_threads()) : 1;
-  if (static_cast<int>(assembly_buffers_.size()) < threads) assembly_buffers_.resize(threads);
+  if (static_cast<int>(buffers.size()) < threads) buffers.resize(threads);
   matrix.diagonal_first = true;  // below: the first slot, then zeros in its column
 #pragma omp parallel num_threads(threads)
   {
     const int thread = omp_get_thread_num(), team = omp_get_num_threads();
     const int first = static_cast<int>(static_cast<std::int64_t>(m) * thread / team);
     const int last = static_cast<int>(static_cast<std::int64_t>(m) * (thread + 1) / team);
-    AssemblyBuffer& buffer = assembly_buffers_[thread];
+    AssemblyBuffer& buffer = buffers[thread];
     // Room for every pair of the share and its diagonals; the buffers only grow.
     std::int64_t room = 0;
     for (int row = first; row < last; ++row) {

@@ -190,7 +190,9 @@ class FluidSystem {
   void measure_density(const StepConstants& c, StepReport& report);
   void measure_background();
   void assemble_pressure_equation(const StepConstants& c);
-  void assemble_laplacian_rows(double radius, double diagonal_shift, SparseRows& matrix);
+  struct AssemblyBuffer;
+  void assemble_laplacian_rows(double radius, double diagonal_shift, SparseRows& matrix,
+                               std::vector<AssemblyBuffer>& buffers);
   void solve_pressure(StepReport& report);
   // Radius of the Laplacian the multigrid hierarchy is built from [m].
   double hierarchy_radius() const;
@@ -288,7 +290,8 @@ class FluidSystem {
     std::vector<int> column;
     std::vector<double> value;
   };
-  std::vector<AssemblyBuffer> assembly_buffers_;
+  // One set a matrix: on one thread a buffer and its matrix trade storage at every assembly.
+  std::vector<AssemblyBuffer> assembly_buffers_, hierarchy_buffers_;
   SparseRows matrix_, hierarchy_matrix_;
   LatticeSums hierarchy_sums_;
 
