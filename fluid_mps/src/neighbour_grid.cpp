@@ -263,9 +263,7 @@ void sort_by_key(std::vector<std::uint64_t>& candidate, std::vector<std::uint64_
 // The particles of the 3^D cells around cell c, sorted by key, with their positions.
 void NeighbourGrid::gather_candidates(std::int64_t c, const std::vector<Eigen::Vector3d>& positions,
                                       const std::vector<int>& key, KeyedScratch& s) const {
-  const Eigen::Array3i cell(
-      static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
-      static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
+  const Eigen::Array3i cell = cell_at(c);
   Eigen::Array3i low, high;
   search_block(cell, s.xs, low, high);
   s.candidate.clear();
@@ -303,9 +301,7 @@ bool NeighbourGrid::narrow_to_parts(std::int64_t c, const std::vector<Eigen::Vec
   const int parts = 1 << dimension_;
   const std::int64_t first = cell_start_[c], last = cell_start_[c + 1];
   if (periodic_.enabled || last - first < 2 * parts) return false;
-  const Eigen::Array3i cell(
-      static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
-      static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y())));
+  const Eigen::Array3i cell = cell_at(c);
   const Eigen::Vector3d centre = origin_ + (cell.cast<double>() + 0.5).matrix() * cell_size_;
   constexpr double kInf = std::numeric_limits<double>::infinity();
   std::array<Eigen::Vector3d, 8> low, high;

@@ -89,6 +89,11 @@ class NeighbourGrid {
   std::int64_t linear(const Eigen::Array3i& cell) const {
     return (static_cast<std::int64_t>(cell.z()) * cells_.y() + cell.y()) * cells_.x() + cell.x();
   }
+  // The cell of linear index c (the inverse of linear()).
+  Eigen::Array3i cell_at(std::int64_t c) const {
+    return {static_cast<int>(c % cells_.x()), static_cast<int>((c / cells_.x()) % cells_.y()),
+            static_cast<int>(c / (static_cast<std::int64_t>(cells_.x()) * cells_.y()))};
+  }
   // Visits the cells low..high (y, z) and the x cells of `xs` (already wrapped).
   template <class Visit>
   void visit_cells(const std::vector<int>& xs, const Eigen::Array3i& low,
