@@ -1,6 +1,7 @@
 #include "row_product.hpp"
 
 #include <algorithm>
+#include <type_traits>
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
@@ -8,8 +9,9 @@
 namespace cosim::mps {
 namespace {
 
-// The rows' own layout. Past the shortest row of a group a row that has ended keeps its sum (a
-// select: no term is added that the plain loop would not add).
+// The rows' own layout (the true residuals of a float product read the double values so). Past
+// the shortest row of a group a row that has ended keeps its sum (a select: no term is added
+// that the plain loop would not add).
 template <class Column, class Value>
 void multiply_own_rows(const std::int64_t* offset, const Column* column, const Value* value,
                        const double* x, int begin, int end, int rows, double* y) {
@@ -62,25 +64,34 @@ void multiply_own_rows(const std::int64_t* offset, const Column* column, const V
 // column): it adds +0 or -0 to its row's sum, which leaves the sum as it is (the sum starts at
 // +0, so it is never -0). With SSE2 two rows' slots are multiplied and added in one instruction
 // each, lane by lane as the scalar operations round: the same bits.
-template <class Column>
-void multiply_groups(const std::int64_t* group_start, const double* group_value,
+template <class Column, class Value>
+void multiply_groups(const std::int64_t* group_start, const Value* group_value,
                      const Column* group_column, const double* x, int begin, int end, double* y) {
   static_assert(kRowGroup % 2 == 0);
   for (int g = begin / kRowGroup; g * kRowGroup < end; ++g) {
     const std::int64_t start = group_start[g];
     const std::int64_t width = (group_start[g + 1] - start) / kRowGroup;
-    const double* value = group_value + start;
+    const Value* value = group_value + start;
     const Column* column = group_column + start;
     double sum[kRowGroup];
 #ifdef __SSE2__
     __m128d pair_sum[kRowGroup / 2];
     for (int h = 0; h < kRowGroup / 2; ++h) pair_sum[h] = _mm_setzero_pd();
     for (std::int64_t t = 0; t < width; ++t) {
-      const double* v = value + kRowGroup * t;
+      const Value* v = value + kRowGroup * t;
       const Column* c = column + kRowGroup * t;
+      __m128d values[kRowGroup / 2];
+      if constexpr (std::is_same_v<Value, float>) {
+        static_assert(kRowGroup == 4);
+        const __m128 four = _mm_loadu_ps(v);
+        values[0] = _mm_cvtps_pd(four);
+        values[1] = _mm_cvtps_pd(_mm_movehl_ps(four, four));
+      } else {
+        for (int h = 0; h < kRowGroup / 2; ++h) values[h] = _mm_loadu_pd(v + 2 * h);
+      }
       for (int h = 0; h < kRowGroup / 2; ++h) {
         const __m128d xs = _mm_loadh_pd(_mm_load_sd(x + c[2 * h]), x + c[2 * h + 1]);
-        pair_sum[h] = _mm_add_pd(pair_sum[h], _mm_mul_pd(_mm_loadu_pd(v + 2 * h), xs));
+        pair_sum[h] = _mm_add_pd(pair_sum[h], _mm_mul_pd(values[h], xs));
       }
     }
     for (int h = 0; h < kRowGroup / 2; ++h) _mm_storeu_pd(sum + 2 * h, pair_sum[h]);
@@ -88,7 +99,7 @@ void multiply_groups(const std::int64_t* group_start, const double* group_value,
     for (int r = 0; r < kRowGroup; ++r) sum[r] = 0.0;
     for (std::int64_t t = 0; t < width; ++t) {
       for (int r = 0; r < kRowGroup; ++r) {
-        sum[r] += value[kRowGroup * t + r] * x[column[kRowGroup * t + r]];
+        sum[r] += static_cast<double>(value[kRowGroup * t + r]) * x[column[kRowGroup * t + r]];
       }
     }
 #endif
@@ -97,9 +108,9 @@ void multiply_groups(const std::int64_t* group_start, const double* group_value,
   }
 }
 
-template <class Column>
+template <class Column, class Value>
 void interleave(const SparseRows& m, const std::vector<std::int64_t>& start,
-                std::vector<double>& group_value, std::vector<Column>& group_column) {
+                std::vector<Value>& group_value, std::vector<Column>& group_column) {
   const int n = m.rows();
   const int groups = static_cast<int>(start.size()) - 1;
   group_value.resize(start[groups]);
@@ -107,7 +118,7 @@ void interleave(const SparseRows& m, const std::vector<std::int64_t>& start,
 #pragma omp parallel for schedule(static) if (groups >= 1024)
   for (int g = 0; g < groups; ++g) {
     const std::int64_t width = (start[g + 1] - start[g]) / kRowGroup;
-    double* value = group_value.data() + start[g];
+    Value* value = group_value.data() + start[g];
     Column* column = group_column.data() + start[g];
     for (int r = 0; r < kRowGroup; ++r) {
       const int i = g * kRowGroup + r;
@@ -115,7 +126,7 @@ void interleave(const SparseRows& m, const std::vector<std::int64_t>& start,
       const std::int64_t length = i < n ? m.offset[i + 1] - first : 0;
       for (std::int64_t t = 0; t < width; ++t) {
         const bool entry = t < length;
-        value[kRowGroup * t + r] = entry ? m.value[first + t] : 0.0;
+        value[kRowGroup * t + r] = static_cast<Value>(entry ? m.value[first + t] : 0.0);
         column[kRowGroup * t + r] =
             static_cast<Column>(entry ? m.column[first + t] : g * kRowGroup);
       }
@@ -129,75 +140,59 @@ RowView row_view(const SparseRows& m, CgWork& work, bool single) {
   RowView view;
   view.m = &m;
   const int n = m.rows();
-  const bool short_columns = n <= 65536;
-  const std::int64_t entries = static_cast<std::int64_t>(m.column.size());
-  if (!single) {
-    const int groups = (n + kRowGroup - 1) / kRowGroup;
-    std::vector<std::int64_t>& start = work.group_start;
-    start.resize(static_cast<std::size_t>(groups) + 1);
-    start[0] = 0;
-    for (int g = 0; g < groups; ++g) {
-      std::int64_t width = 0;
-      for (int i = g * kRowGroup; i < std::min(n, (g + 1) * kRowGroup); ++i) {
-        width = std::max(width, m.offset[i + 1] - m.offset[i]);
-      }
-      start[g + 1] = start[g] + kRowGroup * width;
+  const int groups = (n + kRowGroup - 1) / kRowGroup;
+  std::vector<std::int64_t>& start = work.group_start;
+  start.resize(static_cast<std::size_t>(groups) + 1);
+  start[0] = 0;
+  for (int g = 0; g < groups; ++g) {
+    std::int64_t width = 0;
+    for (int i = g * kRowGroup; i < std::min(n, (g + 1) * kRowGroup); ++i) {
+      width = std::max(width, m.offset[i + 1] - m.offset[i]);
     }
-    view.group_start = start.data();
-    if (short_columns) {
-      interleave(m, start, work.group_value, work.group_short_column);
-      view.group_short_column = work.group_short_column.data();
+    start[g + 1] = start[g] + kRowGroup * width;
+  }
+  view.group_start = start.data();
+  const auto values = [&](auto& column) {
+    if (single) {
+      interleave(m, start, work.group_single_value, column);
+      view.group_single_value = work.group_single_value.data();
     } else {
-      interleave(m, start, work.group_value, work.group_column);
-      view.group_column = work.group_column.data();
+      interleave(m, start, work.group_value, column);
+      view.group_value = work.group_value.data();
     }
-    view.group_value = work.group_value.data();
-    return view;
+  };
+  if (n <= 65536) {
+    values(work.group_short_column);
+    view.group_short_column = work.group_short_column.data();
+  } else {
+    values(work.group_column);
+    view.group_column = work.group_column.data();
   }
-  work.single_value.resize(m.value.size());
-#pragma omp parallel for schedule(static) if (entries >= 65536)
-  for (std::int64_t k = 0; k < entries; ++k) {
-    work.single_value[k] = static_cast<float>(m.value[k]);
-  }
-  view.single_value = work.single_value.data();
-  if (!short_columns) return view;
-  work.short_column.resize(m.column.size());
-#pragma omp parallel for schedule(static) if (entries >= 65536)
-  for (std::int64_t k = 0; k < entries; ++k) {
-    work.short_column[k] = static_cast<std::uint16_t>(m.column[k]);
-  }
-  view.short_column = work.short_column.data();
   return view;
 }
 
 RowView exact_view(const RowView& view) {
-  RowView exact = view;
-  exact.single_value = nullptr;
+  if (!view.group_single_value) return view;
+  RowView exact;  // the double values in the rows' own layout
+  exact.m = view.m;
   return exact;
 }
 
 void multiply_rows(const RowView& view, const double* x, int begin, int end, double* y) {
-  if (view.group_start) {
+  const auto groups = [&](const auto* value) {
     if (view.group_short_column) {
-      multiply_groups(view.group_start, view.group_value, view.group_short_column, x, begin, end,
-                      y);
+      multiply_groups(view.group_start, value, view.group_short_column, x, begin, end, y);
     } else {
-      multiply_groups(view.group_start, view.group_value, view.group_column, x, begin, end, y);
-    }
-    return;
-  }
-  const SparseRows& m = *view.m;
-  const auto own_rows = [&](const auto* value) {
-    if (view.short_column) {
-      multiply_own_rows(m.offset.data(), view.short_column, value, x, begin, end, m.rows(), y);
-    } else {
-      multiply_own_rows(m.offset.data(), m.column.data(), value, x, begin, end, m.rows(), y);
+      multiply_groups(view.group_start, value, view.group_column, x, begin, end, y);
     }
   };
-  if (view.single_value) {
-    own_rows(view.single_value);
+  if (view.group_single_value) {
+    groups(view.group_single_value);
+  } else if (view.group_value) {
+    groups(view.group_value);
   } else {
-    own_rows(m.value.data());
+    const SparseRows& m = *view.m;
+    multiply_own_rows(m.offset.data(), m.column.data(), m.value.data(), x, begin, end, m.rows(), y);
   }
 }
 

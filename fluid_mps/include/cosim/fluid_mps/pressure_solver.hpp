@@ -101,16 +101,16 @@ PcgResult solve_pcg(const SparseRows& matrix, const std::vector<double>& rhs,
 
 // Work vectors of the conjugate gradients (residual, preconditioned residual, direction,
 // product, per-block partial sums) and the matrix as the products read it (row_product.hpp in
-// fluid_mps/src: the rows interleaved by groups, or with float values in their own layout;
-// column indices in 16 bits when they fit).
+// fluid_mps/src: the rows interleaved by groups, with double or float values; column indices in
+// 16 bits when they fit).
 struct CgWork {
   std::vector<double> r, z, p, q, partial;
   bool single_precision = false;  // the CG products read float copies of the values
   std::vector<std::int64_t> group_start;
   std::vector<double> group_value;
-  std::vector<std::uint16_t> group_short_column, short_column;
+  std::vector<float> group_single_value;
+  std::vector<std::uint16_t> group_short_column;
   std::vector<int> group_column;
-  std::vector<float> single_value;
 };
 
 class UpperTriangle;  // upper_triangle.hpp (fluid_mps/src)
