@@ -133,17 +133,16 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
 // i's own), the slot kept only if in reach, with r^2; then the square roots of the kept ones in
 // a second pass, two at a time. Both passes give the bits of the plain loop (the same r^2
 // expression, and a square root is correctly rounded either way).
-void FluidSystem::find_near_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2,
-                                bool tail) {
+std::int64_t FluidSystem::find_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2,
+                                   int* index, double* distance) const {
   const PeriodicBoundary& periodic = parameters_.periodic;
   const Eigen::Vector3d xi = x[i];
   const std::int64_t begin = neighbours_.offset[i], end = neighbours_.offset[i + 1];
-  const int* listed = neighbours_.index.data();
-  int* index = near_.index.data();
-  double* distance = near_.distance.data();
-  std::int64_t slot = begin;
+  const int* listed = neighbours_.index.data() + begin;
+  const std::int64_t length = end - begin;
+  std::int64_t slot = 0;
   if (periodic.enabled) {
-    for (std::int64_t k = begin; k < end; ++k) {
+    for (std::int64_t k = 0; k < length; ++k) {
       const int j = listed[k];
       const double r2 = periodic.wrap(x[j] - xi).squaredNorm();
       index[slot] = j;
@@ -151,7 +150,7 @@ void FluidSystem::find_near_row(int i, const std::vector<Eigen::Vector3d>& x, do
       slot += static_cast<std::int64_t>(r2 <= cutoff2);
     }
   } else {
-    for (std::int64_t k = begin; k < end; ++k) {
+    for (std::int64_t k = 0; k < length; ++k) {
       const int j = listed[k];
       const double r2 = (x[j] - xi).squaredNorm();
       index[slot] = j;
@@ -159,13 +158,22 @@ void FluidSystem::find_near_row(int i, const std::vector<Eigen::Vector3d>& x, do
       slot += static_cast<std::int64_t>(r2 <= cutoff2);
     }
   }
-  std::int64_t k = begin;
+  std::int64_t k = 0;
 #ifdef __SSE2__
   for (; k + 2 <= slot; k += 2) {
     _mm_storeu_pd(distance + k, _mm_sqrt_pd(_mm_loadu_pd(distance + k)));
   }
 #endif
   for (; k < slot; ++k) distance[k] = std::sqrt(distance[k]);
+  return slot;
+}
+
+void FluidSystem::find_near_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2,
+                                bool tail) {
+  const std::int64_t begin = near_.offset[i], end = near_.offset[i + 1];
+  int* index = near_.index.data();
+  double* distance = near_.distance.data();
+  std::int64_t slot = begin + find_row(i, x, cutoff2, index + begin, distance + begin);
   near_end_[i] = slot;
   if (!tail) return;
   for (; slot < end; ++slot) {

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include <omp.h>
+
 #include "cosim/fluid_mps/boundaries.hpp"
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/hydrostatic_background.hpp"
@@ -118,8 +120,7 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   // n^k only enters the mixed source term; without it walls and dummies have nothing to sum.
   const bool mixed = p.source_term == MpsParameters::SourceTerm::mixed;
   const double cutoff = mixed ? std::max(c.re_n, c.re_l) : c.re_l;
-  if (masked) find_near_pairs(x_, cutoff);
-  near_.radius = cutoff;  // the pairs at r^n here; measure_density finds them again at r*
+  if (masked) find_near_pairs(x_, cutoff);  // measure_density finds them again at r*
   const double cutoff2 = near_cutoff2(cutoff);
   const double viscous_factor = p.kinematic_viscosity * laplacian_factor(c.d, c.n0_l, c.lambda);
   // Sized here, set in the loop (one pass over the particles instead of four).
@@ -127,6 +128,8 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
   velocity_star_.resize(n);
   position_star_.resize(n);
   wall_viscous_.resize(n);
+  if (pair_rows_.size() < static_cast<std::size_t>(omp_get_max_threads()))
+    pair_rows_.resize(omp_get_max_threads());
 #pragma omp parallel for schedule(dynamic, kParticleChunk) if (n >= 4096)
   for (int i = 0; i < n; ++i) {
     velocity_star_[i] = u_[i];
@@ -150,11 +153,23 @@ void FluidSystem::predict(const StepConstants& c, StepReport& report) {
       laplacian += term;
       if (!is_fluid(kind_[j])) wall_laplacian += term;
     };
-    // Without partitions the row is found here, while it is in cache: its distances in one
-    // branch-free pass, then the sums over the pairs in reach, in list order.
-    if (!masked) find_near_row(i, x_, cutoff2, false);
-    for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
-      pair(near_.index[k], near_.distance[k]);
+    if (masked) {
+      for (std::int64_t k = near_.offset[i]; k < near_end_[i]; ++k) {
+        pair(near_.index[k], near_.distance[k]);
+      }
+    } else {
+      // Without partitions the row is found here: its distances in one branch-free pass, then
+      // the sums over the pairs in reach, in list order. No later stage reads the pairs at r^n,
+      // so they go to the thread's own row (in L1), not to near_ (11 MB a step in
+      // honami_field, written and never read back from there).
+      PairRow& row = pair_rows_[omp_get_thread_num()];
+      const std::size_t room = static_cast<std::size_t>(neighbours_.end(i) - neighbours_.begin(i));
+      if (row.index.size() < room) {
+        row.index.resize(room);
+        row.distance.resize(room);
+      }
+      const std::int64_t count = find_row(i, x_, cutoff2, row.index.data(), row.distance.data());
+      for (std::int64_t k = 0; k < count; ++k) pair(row.index[k], row.distance[k]);
     }
     density_now_[i] = density_sum;
     wall_viscous_[i] = wall_laplacian;

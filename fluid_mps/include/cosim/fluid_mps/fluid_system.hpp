@@ -211,6 +211,10 @@ class FluidSystem {
   // Row i of find_near_pairs (r^2 <= cutoff2); with `tail` the rest of the row is filled with
   // the particle itself at infinity, so that the partition mask can walk whole rows.
   void find_near_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2, bool tail);
+  // The same row written to index[0 ..) and distance[0 ..) (room for the list's whole row);
+  // returns how many pairs it holds.
+  std::int64_t find_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2, int* index,
+                        double* distance) const;
   // (1 + 1e-12) cutoff^2: pairs are dropped on r^2 with a margin well above rounding; the stages
   // compare the distance itself with their radii.
   static double near_cutoff2(double cutoff) { return cutoff * cutoff * (1.0 + 1e-12); }
@@ -270,6 +274,12 @@ class FluidSystem {
   NeighbourSearchWork search_work_;  // the search's buffers, kept for the next search
   NeighbourList near_;               // find_near_pairs: same offsets as neighbours_
   std::vector<std::int64_t> near_end_;
+  // One per thread: a row of pairs that only its own stage reads (find_row), kept in L1.
+  struct PairRow {
+    std::vector<int> index;
+    std::vector<double> distance;
+  };
+  std::vector<PairRow> pair_rows_;
   std::vector<Eigen::Vector3d> search_positions_, scratch_, unshifted_velocity_;
   std::vector<char> include_, own_row_;  // grid membership; rows searched (not dummies)
   bool neighbours_valid_ = false;
