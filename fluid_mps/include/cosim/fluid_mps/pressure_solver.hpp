@@ -148,7 +148,8 @@ class PressureSolver {
   // The products of the CG iterations read the matrix values rounded to float (fewer bytes an
   // entry; sums, vectors and the initial residual stay double, and true residuals with the
   // double values decide the stop). Off by default: it changes the bits of the solution and
-  // gains only on large 3D systems (docs/performance.md, single-precision product).
+  // gains only where the matrix outgrows the caches in double but not in float (large 3D
+  // systems, honami_field in 2D; docs/performance.md, single-precision product).
   void set_single_precision_product(bool on) { work_.single_precision = on; }
   bool single_precision_product() const { return work_.single_precision; }
   // The products of the CG read the upper triangle only (each pair a_ij = a_ji once, half the
