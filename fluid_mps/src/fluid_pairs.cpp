@@ -129,9 +129,9 @@ void FluidSystem::update_neighbours(const std::vector<Eigen::Vector3d>& x, StepR
   ++report.neighbour_searches;
 }
 
-// Branch-free: every listed partner is written to the next slot (slots [offset[i], k] are row
-// i's own), the slot kept only if in reach, with r^2; then the square roots of the kept ones in
-// a second pass, two at a time. Both passes give the bits of the plain loop (the same r^2
+// Branch-free: every listed partner is written to the next slot (the arrays have room for the
+// whole listed row), the slot kept only if in reach, with r^2; then the square roots of the kept
+// ones in a second pass, two at a time. Both passes give the bits of the plain loop (the same r^2
 // expression, and a square root is correctly rounded either way).
 std::int64_t FluidSystem::find_row(int i, const std::vector<Eigen::Vector3d>& x, double cutoff2,
                                    int* index, double* distance) const {
