@@ -119,7 +119,7 @@ struct MpsParameters {
   // (a matrix perturbed by at most 2^-24 relative an entry); off by default
   // (docs/performance.md: its cost and its effect on the validation figures). It pays where a
   // thread's share of the matrix outgrows its cache in double but not in float: honami_field
-  // (17 k unknowns, 48 entries a row) sets it, for a pressure solve 0.90 as long.
+  // (17 k unknowns, 48 entries a row) sets it, for a pressure solve 0.91 as long.
   bool single_precision_product = false;
   // What the CG products read (pressure_solver.hpp): upper_triangle reads each pair of the
   // symmetric matrix once (half the bytes; the result still does not depend on the thread
