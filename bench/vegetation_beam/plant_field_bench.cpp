@@ -8,6 +8,7 @@
 #include <numbers>
 #include <vector>
 
+#include "beam_test_helpers.hpp"  // tests/vegetation_beam: the scenes' plants
 #include "cosim/vegetation_beam/plant_field.hpp"
 
 namespace {
@@ -86,21 +87,9 @@ void BM_RigidUpright(benchmark::State& state) {
 // the scene's now). reuse_jacobian: keep each plant's Jacobian over the window's sub-steps (the
 // default), or factorise it at every sub-step.
 void honami_reeds(benchmark::State& state, double safety_factor, bool reuse_jacobian) {
-  PlantSpec reed;
-  reed.length = 1.0;
-  reed.links = 10;
-  reed.width = 0.01;
-  reed.thickness = 0.007854;
-  reed.bending_stiffness = 0.847;
-  reed.axial_stiffness = 1.3552e5;
-  reed.density = 500;
-  reed.direction = Eigen::Vector3d::UnitZ();
   std::vector<PlantSpec> specs;
-  for (int i = 0; i < 200; ++i) {
-    PlantSpec spec = reed;
-    spec.base = Eigen::Vector3d(5.0 + 0.05 * i, 0, 0);
-    specs.push_back(spec);
-  }
+  for (int i = 0; i < 200; ++i)
+    specs.push_back(cosim::vegetation::testing::honami_reed(5.0 + 0.05 * i));
   BeamParameters parameters;
   parameters.gravity = Eigen::Vector3d(0, 0, -9.81);
   parameters.drag_coefficient = 0.9;

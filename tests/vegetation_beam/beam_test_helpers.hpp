@@ -72,4 +72,20 @@ inline double cantilever_frequency(int mode, double bending_stiffness, double ma
          (2 * std::numbers::pi);
 }
 
+// A reed of scenarios/honami_field (seed 000 section 4): 1 m tall, 10 links, d = 0.01 m,
+// EI = 0.847 N m^2, EA of E = 1.73e9 Pa, specific gravity 0.5, upright (z) at x = `x`.
+inline PlantSpec honami_reed(double x) {
+  PlantSpec reed;
+  reed.base = Eigen::Vector3d(x, 0, 0);
+  reed.direction = Eigen::Vector3d::UnitZ();
+  reed.length = 1.0;
+  reed.links = 10;
+  reed.width = 0.01;
+  reed.thickness = 0.007854;  // pi d / 4: width x thickness = the round stem's area
+  reed.bending_stiffness = 0.847;
+  reed.axial_stiffness = 1.3552e5;
+  reed.density = 500;
+  return reed;
+}
+
 }  // namespace cosim::vegetation::testing

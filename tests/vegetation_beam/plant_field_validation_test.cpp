@@ -211,20 +211,8 @@ TEST(NewmarkDynamics, DampedMotionSettlesAtTheStaticSolution) {
 // (safety_factor 5) to 1e-4 of the tips' displacement, far below the honami's fluctuations
 // (about 1 % of it; docs/validation.md, honami_field).
 std::vector<Eigen::Vector3d> honami_reed_tips(double safety_factor, double& largest) {
-  PlantSpec reed;
-  reed.length = 1.0;
-  reed.links = 10;
-  reed.width = 0.01;
-  reed.thickness = 0.007854;
-  reed.bending_stiffness = 0.847;
-  reed.axial_stiffness = 1.3552e5;
-  reed.density = 500;
-  reed.direction = Eigen::Vector3d::UnitZ();
   std::vector<PlantSpec> reeds;
-  for (int i = 0; i < 4; ++i) {
-    reed.base = Eigen::Vector3d(0.05 * i, 0, 0);
-    reeds.push_back(reed);
-  }
+  for (int i = 0; i < 4; ++i) reeds.push_back(testing::honami_reed(0.05 * i));
   BeamParameters parameters;
   parameters.gravity = Eigen::Vector3d(0, 0, -9.81);
   parameters.drag_coefficient = 0.9;
