@@ -10,13 +10,9 @@
 
 #include "cosim/fluid_mps/fluid_system.hpp"
 #include "cosim/fluid_mps/neighbour_grid.hpp"
-#include "step_constants.hpp"
 
 namespace cosim::mps {
 namespace {
-
-// From this many points the hooks' loops over points run in parallel.
-constexpr std::int64_t kParallelPoints = 64;
 
 // Fluid particles within `radius` of each point: point q's group is index[offset[q] ..
 // offset[q + 1]), in increasing particle index.
@@ -39,7 +35,7 @@ PointGroups groups_within(const Grid& near, const std::vector<Eigen::Vector3d>& 
   PointGroups groups;
   groups.offset.assign(points.size() + 1, 0);
   if (points.empty() || near.inside.empty()) return groups;
-  const int team = count >= kParallelPoints ? std::max(1, omp_get_max_threads()) : 1;
+  const int team = count >= 64 ? std::max(1, omp_get_max_threads()) : 1;
   std::vector<std::vector<int>> found_by_thread(team);
 #pragma omp parallel num_threads(team)
   {
@@ -135,9 +131,7 @@ std::vector<Eigen::Vector3d> FluidSystem::sample_velocity(
       fill_lattice_sums(parameters_, radius / parameters_.particle_spacing).neighbour_count + 1.0;
   std::vector<Eigen::Vector3d> velocity(points.size(), Eigen::Vector3d::Zero());
   if (water_fraction) water_fraction->assign(points.size(), 0.0);
-  const std::int64_t count = static_cast<std::int64_t>(points.size());
-#pragma omp parallel for schedule(static) if (count >= kParallelPoints)
-  for (std::int64_t q = 0; q < count; ++q) {
+  for (std::size_t q = 0; q < points.size(); ++q) {
     const std::size_t size = groups.size(q);
     if (size == 0) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -162,7 +156,8 @@ ForceDelivery FluidSystem::set_point_forces(
     const std::vector<std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>>&
         point_forces,
     double radius) {
-  fill(external_accelerations_, positions_.size(), Eigen::Vector3d(Eigen::Vector3d::Zero()));
+  std::fill(external_accelerations_.begin(), external_accelerations_.end(),
+            Eigen::Vector3d::Zero());
   ForceDelivery delivery;
   for (const auto& [points, forces] : point_forces) {
     if (points.size() != forces.size()) {
@@ -170,32 +165,17 @@ ForceDelivery FluidSystem::set_point_forces(
     }
     if (points.empty()) continue;
     const auto groups = groups_within(point_grid(points, radius), points, radius);
+    // Serial accumulation in point order: deterministic.
     for (std::size_t q = 0; q < points.size(); ++q) {
-      if (groups.size(q) > 0) continue;
-      ++delivery.undelivered_points;
-      delivery.undelivered_force += forces[q];
-    }
-    // Each particle sums its points' shares in point order, as a serial loop over the points
-    // adds them (deterministic, the same bits on any thread count): a thread takes the
-    // particles of its own contiguous index range and reads every group.
-    const int n = particle_count();
-    const int team = static_cast<std::int64_t>(points.size()) >= kParallelPoints
-                         ? std::max(1, omp_get_max_threads())
-                         : 1;
-#pragma omp parallel num_threads(team)
-    {
-      const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
-      const int low = static_cast<int>(static_cast<std::int64_t>(n) * thread / threads);
-      const int high = static_cast<int>(static_cast<std::int64_t>(n) * (thread + 1) / threads);
-      for (std::size_t q = 0; q < points.size(); ++q) {
-        const std::size_t size = groups.size(q);
-        if (size == 0) continue;
-        const Eigen::Vector3d acceleration =
-            forces[q] / (particle_mass_ * static_cast<double>(size));
-        for (std::int64_t k = groups.offset[q]; k < groups.offset[q + 1]; ++k) {
-          const int i = groups.index[k];
-          if (i >= low && i < high) external_accelerations_[i] += acceleration;
-        }
+      const std::size_t size = groups.size(q);
+      if (size == 0) {
+        ++delivery.undelivered_points;
+        delivery.undelivered_force += forces[q];
+        continue;
+      }
+      const Eigen::Vector3d acceleration = forces[q] / (particle_mass_ * static_cast<double>(size));
+      for (std::int64_t k = groups.offset[q]; k < groups.offset[q + 1]; ++k) {
+        external_accelerations_[groups.index[k]] += acceleration;
       }
     }
   }
