@@ -9,13 +9,14 @@
 namespace cosim::mps {
 namespace {
 
-// The rows' own layout (the true residuals of a float product read the double values so). Past
-// the shortest row of a group a row that has ended keeps its sum (a select: no term is added
-// that the plain loop would not add).
-template <class Column, class Value>
-void multiply_own_rows(const std::int64_t* offset, const Column* column, const Value* value,
-                       const double* x, int begin, int end, int rows, double* y) {
-  const std::int64_t entries = offset[rows];
+// The rows' own layout, double values and int columns (the true residuals of a float product
+// read the matrix so). Past the shortest row of a group a row that has ended keeps its sum (a
+// select: no term is added that the plain loop would not add).
+void multiply_own_rows(const SparseRows& m, const double* x, int begin, int end, double* y) {
+  const std::int64_t* offset = m.offset.data();
+  const int* column = m.column.data();
+  const double* value = m.value.data();
+  const std::int64_t entries = offset[m.rows()];
   int i = begin;
   for (; i + kRowGroup <= end; i += kRowGroup) {
     std::int64_t first[kRowGroup], length[kRowGroup];
@@ -30,22 +31,21 @@ void multiply_own_rows(const std::int64_t* offset, const Column* column, const V
     }
     for (std::int64_t t = 0; t < shortest; ++t) {
       for (int g = 0; g < kRowGroup; ++g) {
-        sum[g] += static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
+        sum[g] += value[first[g] + t] * x[column[first[g] + t]];
       }
     }
     if (first[kRowGroup - 1] + longest <= entries) {
       // The slots past a row's end are those of the next rows: valid to read, never summed.
       for (std::int64_t t = shortest; t < longest; ++t) {
         for (int g = 0; g < kRowGroup; ++g) {
-          const double added =
-              sum[g] + static_cast<double>(value[first[g] + t]) * x[column[first[g] + t]];
+          const double added = sum[g] + value[first[g] + t] * x[column[first[g] + t]];
           sum[g] = t < length[g] ? added : sum[g];
         }
       }
     } else {
       for (int g = 0; g < kRowGroup; ++g) {
         for (std::int64_t k = first[g] + shortest; k < first[g] + length[g]; ++k) {
-          sum[g] += static_cast<double>(value[k]) * x[column[k]];
+          sum[g] += value[k] * x[column[k]];
         }
       }
     }
@@ -54,7 +54,7 @@ void multiply_own_rows(const std::int64_t* offset, const Column* column, const V
   for (; i < end; ++i) {
     double sum = 0.0;
     for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) {
-      sum += static_cast<double>(value[k]) * x[column[k]];
+      sum += value[k] * x[column[k]];
     }
     y[i] = sum;
   }
@@ -191,8 +191,7 @@ void multiply_rows(const RowView& view, const double* x, int begin, int end, dou
   } else if (view.group_value) {
     groups(view.group_value);
   } else {
-    const SparseRows& m = *view.m;
-    multiply_own_rows(m.offset.data(), m.column.data(), m.value.data(), x, begin, end, m.rows(), y);
+    multiply_own_rows(*view.m, x, begin, end, y);
   }
 }
 
